@@ -1,0 +1,120 @@
+// The predicate-DAE integrator: variable-order, variable-step BDF (orders 1-5, fixed-leading-
+// coefficient form as in DASSL/IDA) applied to the charge-oriented form of system.hpp, with
+// exact event location, jumps and consistent re-initialization.
+//
+// Use, one step at a time (the caller writes output and decides what to do next):
+//
+//     padae::Integrator integrator(system, options);
+//     integrator.initialize(t0, x0);            // or initialize(t0, x0, p0)
+//     while (integrator.time() < t_end) {
+//       auto outcome = integrator.step(t_end);
+//       if (outcome.kind == padae::StepKind::failed) ...;
+//       ...                                     // output integrator.state()
+//     }
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "padae/system.hpp"
+
+namespace padae {
+
+struct Options {
+  double rtol = 1e-4;
+  double atol = 1e-6;              // default absolute tolerance, see System::absolute_tolerance
+  int max_order = 5;
+  double initial_step = 0.0;       // 0: chosen from the tolerances
+  double max_step = 0.0;           // 0: unlimited
+  double min_step = 0.0;           // 0: from the time scale and round-off
+  double time_scale = 1.0;         // characteristic length of the run (tstop - t0): sets h_min
+  int max_event_iterations = 50;   // predicate fixed-point iterations at one event
+  int max_events_in_burst = 1000;  // events closer than min_step to each other before "accumulation"
+};
+
+struct Statistics {
+  long steps = 0;                  // accepted steps
+  long rejected_error_test = 0;
+  long rejected_newton = 0;
+  long rejected_domain = 0;        // model evaluations outside the domain (IER)
+  long residual_evaluations = 0;
+  long newton_iterations = 0;
+  long jacobians = 0;
+  long lu_factorizations = 0;
+  long events = 0;                 // state events (predicate flips) handled
+  long time_events = 0;
+  long jumps = 0;                  // events at which the state jumped
+};
+
+// A predicate change at an event.
+struct PredicateFlip {
+  int predicate;
+  bool from;
+  bool to;
+};
+
+// Why a step ended.
+enum class StepKind {
+  accepted,    // an ordinary step
+  event,       // ended at a located predicate change; last_event() tells which
+  time_event,  // ended exactly at a time event (source corner)
+  stop,        // reached t_stop exactly
+  failed,      // could not continue; failure() tells where and why
+};
+
+struct StepOutcome {
+  StepKind kind;
+  double t;
+};
+
+struct EventRecord {
+  double t = 0;
+  std::vector<PredicateFlip> flips;  // all flips, in order, including those of the fixed point
+  Vector x_before;                   // x(t - 0)
+  Vector x_after;                    // x(t + 0), consistent with the new predicates
+  bool jumped = false;               // x_after differs from x_before in a dynamic quantity
+  int iterations = 0;                // predicate fixed-point iterations
+};
+
+struct Failure {
+  double t;
+  std::string reason;
+  int unknown = -1;                  // the unknown that was worst, when one is to blame
+};
+
+class Integrator {
+ public:
+  Integrator(System& system, Options options);
+  ~Integrator();
+  Integrator(const Integrator&) = delete;
+  Integrator& operator=(const Integrator&) = delete;
+
+  // Starts at (t0, x0) with the predicates the guards give (or the given ones), makes the state
+  // consistent (jump projection + algebraic re-initialization, predicate fixed point).
+  // Returns false, with failure() set, when no consistent state is found.
+  bool initialize(double t0, const Vector& x0);
+  bool initialize(double t0, const Vector& x0, const Predicates& p0);
+
+  // One step toward t_stop; never past it.
+  StepOutcome step(double t_stop);
+
+  double time() const;
+  const Vector& state() const;            // x at time()
+  const Predicates& predicates() const;   // p for the next step
+  int order() const;                      // order of the last step
+  double step_size() const;               // size of the last step
+  // Dense output: x(t) for t inside the last step, from its interpolating polynomial.
+  Vector interpolate(double t) const;
+
+  const EventRecord& last_event() const;
+  const Failure& failure() const;
+  const Statistics& statistics() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace padae

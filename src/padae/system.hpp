@@ -1,0 +1,102 @@
+// The mathematical contract between a model and the integrator: a predicate-parameterized
+// DAE in charge-oriented form (see shared/docs/predicate-dae.md):
+//
+//     d/dt q(x, p) + f(t, x, p) = 0            x in R^n, p in {0,1}^K
+//     p_k = (guard_k(t, x) > 0)                 the predicates
+//     x(t_i + 0) = x(t_i - 0) + X(t_i - 0) e    jumps at events, e_k = +1 (0 -> 1) or -1 (1 -> 0)
+//
+// For every fixed p, f and q are smooth. Rows whose q depends on x are dynamic (their q carries
+// memory: for circuits, capacitor charges and inductor fluxes); the other rows are algebraic.
+// The paper's semi-explicit forms (3) and (5) are the special case q_i(x) = x_i for the
+// differential rows and f = -rhs (see semi_explicit.hpp).
+//
+// Models never see the step size or the method: they load f, q and their derivatives only.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "padae/pattern.hpp"
+
+namespace padae {
+
+using Vector = Eigen::VectorXd;
+// The predicate vector p, one 0/1 entry per predicate.
+using Predicates = std::vector<std::uint8_t>;
+
+enum class UnknownKind : std::uint8_t {
+  differential,  // integrated; error-tested through the dynamic rows' q
+  algebraic,     // determined by the equations at each instant
+  auxiliary,     // piecewise constant: changed only by jumps at events, never integrated (paper, 5)
+};
+
+// Result of a model evaluation, like the paper's IER flag: outside its domain a model says so
+// and the integrator cuts the step instead of failing.
+enum class EvalStatus : std::uint8_t { ok, outside_domain };
+
+// What a model loads at (t, x, p). The integrator owns the storage and sizes it.
+struct Load {
+  Vector f;                    // f(t, x, p), length n
+  Vector q;                    // q(x, p), length n
+  std::vector<double> df_dx;   // values on pattern(), when jacobian_requested
+  std::vector<double> dq_dx;   // values on pattern(), when jacobian_requested
+  bool jacobian_requested = false;
+};
+
+// Non-zero entries of the jump matrix X (n x K): column `predicate`, row `row`.
+struct JumpEntry {
+  int row;
+  int predicate;
+  double value;
+};
+
+class System {
+ public:
+  virtual ~System() = default;
+
+  virtual int size() const = 0;
+  virtual UnknownKind kind(int unknown) const = 0;
+  virtual const Pattern& pattern() const = 0;
+
+  // Loads f, q (and, when out.jacobian_requested, df/dx and dq/dx on the pattern; the arrays
+  // arrive zeroed). Rows of auxiliary unknowns must be left untouched.
+  virtual EvalStatus load(double t, const Vector& x, const Predicates& p, Load& out) = 0;
+
+  // Whether load() provides exact derivatives; if not, the integrator differentiates f and q
+  // by finite differences on the pattern.
+  virtual bool analytic_jacobian() const { return true; }
+
+  // Predicates. guard_k(t, x) > 0 <=> p_k; a guard must be continuous in t and x for fixed
+  // auxiliary unknowns, so that its sign change can be located.
+  virtual int predicate_count() const { return 0; }
+  virtual EvalStatus guards(double t, const Vector& x, Vector& out) const {
+    (void)t, (void)x, (void)out;
+    return EvalStatus::ok;
+  }
+
+  // Jumps (form (5)). Only called at events, and only when has_jumps().
+  // Appends the non-zeros of X(t, x, p) to `out` (which arrives empty).
+  virtual bool has_jumps() const { return false; }
+  virtual void jump_matrix(double t, const Vector& x, const Predicates& p,
+                           std::vector<JumpEntry>& out) const {
+    (void)t, (void)x, (void)p, (void)out;
+  }
+
+  // Time events known in advance (source corners): the first one strictly after t, or +inf.
+  // The integrator ends a step exactly there and restarts at order 1.
+  virtual double next_time_event(double t) const {
+    (void)t;
+    return std::numeric_limits<double>::infinity();
+  }
+
+  // Unknown scale for the tolerance: the absolute tolerance of unknown i in its own units.
+  // Default: Options::atol for all.
+  virtual double absolute_tolerance(int unknown, double default_atol) const {
+    (void)unknown;
+    return default_atol;
+  }
+};
+
+}  // namespace padae

@@ -74,6 +74,10 @@ struct EventRecord {
   std::vector<PredicateFlip> flips;  // all flips, in order, including those of the fixed point
   Vector x_before;                   // x(t - 0)
   Vector x_after;                    // x(t + 0), consistent with the new predicates
+  // The integral of each unknown over the jump: for a branch current, the charge it carried
+  // impulsively (for a node voltage, the flux). Zero where nothing was impulsive. With it a
+  // model can account the energy a jump dissipated (sources deliver V * charge).
+  Vector impulse;
   bool jumped = false;               // x_after differs from x_before in a dynamic quantity
   int iterations = 0;                // predicate fixed-point iterations
 };

@@ -1,0 +1,55 @@
+// Source text and the diagnostics that point into it.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "netlist/position.hpp"
+
+namespace netlist {
+
+struct SourceFile {
+  SourceFile(std::string path, std::string text);
+
+  std::string path;
+  std::string text;
+  std::vector<std::size_t> line_starts;  // offset of each line's first character
+
+  // The text of a 1-based line without its line terminator; empty when out of range.
+  std::string_view line(int number) const;
+};
+
+enum class Severity { error, warning, note };
+
+struct Diagnostic {
+  Severity severity;
+  SourceRange where;  // where.begin.file is null for diagnostics about no particular text
+  std::string message;
+};
+
+// Collects diagnostics of a whole parse/elaboration so that several errors are reported at once.
+class Diagnostics {
+ public:
+  void error(SourceRange where, std::string message);
+  void warning(SourceRange where, std::string message);
+  void note(SourceRange where, std::string message);
+
+  bool has_errors() const { return error_count_ > 0; }
+  int error_count() const { return error_count_; }
+  const std::vector<Diagnostic>& all() const { return items_; }
+
+  // All diagnostics, each as formatted by netlist::format.
+  std::string to_string() const;
+
+ private:
+  std::vector<Diagnostic> items_;
+  int error_count_ = 0;
+};
+
+// "file:line:column: error: message", then the source line and a caret under the range.
+std::string format(const Diagnostic& diagnostic);
+
+}  // namespace netlist

@@ -1,0 +1,45 @@
+// Internal: an unbuffered file descriptor fed whole records from a user-space buffer.
+// Records (CSV lines, raw points) are appended with commit(); the buffer reaches the file only at
+// record boundaries, when it grows past a size limit or 0.1 s after the previous flush.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include <fmt/format.h>
+
+namespace padsim::output::detail {
+
+class FileSink {
+ public:
+  // path "-" is standard output (not closed at the end).
+  explicit FileSink(const std::string& path);
+  ~FileSink();
+  FileSink(const FileSink&) = delete;
+  FileSink& operator=(const FileSink&) = delete;
+
+  fmt::memory_buffer& buffer() { return buffer_; }  // append one record, then commit()
+  // Marks the end of a record; returns true when the buffer was written to the file.
+  bool commit();
+  void flush();                                     // writes the buffer now
+  std::int64_t offset() const { return written_; }  // bytes in the file so far (after flush)
+  void pwrite_at(std::int64_t offset, std::string_view bytes);  // overwrite in place
+  void close();                                     // flush and close; idempotent, no throw after failure
+  const std::string& path() const { return path_; }
+  bool failed() const { return failed_; }
+
+ private:
+  [[noreturn]] void fail(const char* what);
+  std::string path_;
+  int fd_ = -1;
+  bool owns_fd_ = false;
+  bool failed_ = false;
+  std::int64_t written_ = 0;
+  fmt::memory_buffer buffer_;
+  std::chrono::steady_clock::time_point last_flush_;
+  unsigned records_since_check_ = 0;
+};
+
+}  // namespace padsim::output::detail

@@ -1,0 +1,198 @@
+// What a device is to the model: it allocates its unknowns, declares its Jacobian entries once,
+// then loads f, q and their derivatives (Xyce-style: no step size, no method). Conditional
+// devices also own predicates (guards and jump-matrix entries). Each device lives in its own
+// file under devices/ and registers a factory for its element letter (gnucap-style).
+#pragma once
+
+#include <functional>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "mna/circuit_spec.hpp"
+#include "padae/integrator.hpp"
+
+namespace mna {
+
+using padae::Vector;
+
+// Bad input found while building the model (unknown element, missing controlling source,
+// structurally singular circuit): the command exits with status 2.
+class ModelError : public std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+constexpr int ground = -1;  // the index of the reference node: never an unknown
+constexpr double infinity = std::numeric_limits<double>::infinity();
+
+enum class UnknownCategory { node_voltage, internal_node, branch_current, auxiliary };
+
+// The unknowns of the model: node voltages first, then whatever devices allocate.
+class Unknowns {
+ public:
+  // Index of a circuit node, created on first use; ground for "0" and "gnd".
+  int node(const std::string& name);
+  int add(std::string label, UnknownCategory category, std::string owner);
+  // Index of the branch current of `element` (V, L, E, H, B with V=, ideal switch or diode).
+  int branch(const std::string& element) const;
+  bool has_branch(const std::string& element) const;
+
+  int size() const { return static_cast<int>(labels_.size()); }
+  const std::string& label(int unknown) const { return labels_.at(unknown); }  // "v(out)", "i(l1)"
+  UnknownCategory category(int unknown) const { return categories_.at(unknown); }
+  const std::string& owner(int unknown) const { return owners_.at(unknown); }  // node or element
+
+ private:
+  std::vector<std::string> labels_;
+  std::vector<UnknownCategory> categories_;
+  std::vector<std::string> owners_;
+};
+
+// Collects the Jacobian entries of all devices; once the pattern exists, every declared slot
+// is overwritten with its position in the value arrays (or -1 when its row or column is ground).
+class Device;
+class Stamper {
+ public:
+  Stamper(Unknowns& unknowns, const std::vector<std::unique_ptr<Device>>& devices)
+      : unknowns_(unknowns), devices_(devices) {}
+  Unknowns& unknowns() { return unknowns_; }
+  // Another device by name (K reads its inductors), or nullptr.
+  const Device* device(const std::string& name) const;
+
+  void entry(int row, int column, int& slot) { declare(row, column, slot, false); }
+  void charge_entry(int row, int column, int& slot) { declare(row, column, slot, true); }
+
+  // The four entries a two-terminal conductance (or capacitance) touches.
+  struct Block {
+    int aa = -1, ab = -1, ba = -1, bb = -1;
+  };
+  void block(int a, int b, Block& slots) {
+    entry(a, a, slots.aa), entry(a, b, slots.ab), entry(b, a, slots.ba), entry(b, b, slots.bb);
+  }
+  void charge_block(int a, int b, Block& slots) {
+    charge_entry(a, a, slots.aa), charge_entry(a, b, slots.ab);
+    charge_entry(b, a, slots.ba), charge_entry(b, b, slots.bb);
+  }
+
+  // Used by the model after all devices declared.
+  padae::Pattern build_pattern(int size);
+  std::vector<bool> charged_columns(int size) const;
+
+ private:
+  void declare(int row, int column, int& slot, bool charge);
+  struct Declared {
+    int row, column;
+    int* slot;
+    bool charge;
+  };
+  Unknowns& unknowns_;
+  const std::vector<std::unique_ptr<Device>>& devices_;
+  std::vector<Declared> declared_;
+};
+
+// One model evaluation as a device sees it.
+class Evaluation {
+ public:
+  Evaluation(double t, const Vector& x, const padae::Predicates& p, padae::Load& out)
+      : t(t), x(x), p(p), out_(out) {}
+  const double t;
+  const Vector& x;
+  const padae::Predicates& p;
+
+  double value(int unknown) const { return unknown == ground ? 0.0 : x[unknown]; }
+  bool jacobian() const { return out_.jacobian_requested; }
+  void f(int row, double value) { if (row != ground) out_.f[row] += value; }
+  void q(int row, double value) { if (row != ground) out_.q[row] += value; }
+  void df(int slot, double value) { if (slot >= 0) out_.df_dx[slot] += value; }
+  void dq(int slot, double value) { if (slot >= 0) out_.dq_dx[slot] += value; }
+  void df(const Stamper::Block& b, double g) { df(b.aa, g), df(b.ab, -g), df(b.ba, -g), df(b.bb, g); }
+  void dq(const Stamper::Block& b, double c) { dq(b.aa, c), dq(b.ab, -c), dq(b.ba, -c), dq(b.bb, c); }
+
+ private:
+  padae::Load& out_;
+};
+
+// How a device connects nodes, for the structural checks before a run.
+enum class Connection {
+  conductive,       // R, D, finite switches: a DC path
+  capacitive,       // C: a path only in transient
+  voltage_defined,  // V, E, H, B with V=: a DC path that fixes the voltage (loops are singular)
+  inductive,        // L: a DC short (a loop with voltage sources is singular at DC)
+  current_defined,  // I, F, G, B with I=: no path
+};
+struct Edge {
+  int a, b;
+  Connection connection;
+  std::string element;
+};
+
+class Device {
+ public:
+  explicit Device(std::string name) : name_(std::move(name)) {}
+  virtual ~Device() = default;
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+  const std::string& name() const { return name_; }
+
+  // Internal nodes, branch currents, auxiliary unknowns.
+  virtual void allocate(Unknowns& unknowns) { (void)unknowns; }
+  // Jacobian entries (controlling branches of other devices are known by now).
+  virtual void declare(Stamper& stamper) = 0;
+  virtual void load(Evaluation& e) const = 0;
+  virtual void edges(std::vector<Edge>& out) const = 0;
+
+  // Predicates, numbered from first_predicate() in the model's vector.
+  virtual int predicate_count() const { return 0; }
+  virtual std::string predicate_label(int local) const { return std::to_string(local); }
+  void set_first_predicate(int first) { first_predicate_ = first; }
+  int first_predicate() const { return first_predicate_; }
+  virtual void guards(double t, const Vector& x, double* out) const { (void)t, (void)x, (void)out; }
+  virtual void jump_entries(std::vector<padae::JumpEntry>& out) const { (void)out; }
+  // Mode the auxiliary unknowns start in (switch ON/OFF); x0 entries of other unknowns are set
+  // by the initial conditions.
+  virtual void initial_auxiliaries(Vector& x0) const { (void)x0; }
+
+  virtual double next_time_event(double t) const { (void)t; return infinity; }
+
+  // Energy accounting at jumps: stored energy, and energy delivered while `impulse` (the
+  // integral of each unknown over the jump) passed.
+  virtual double stored_energy(const Vector& x) const { (void)x; return 0; }
+  virtual double delivered_energy(double t, const Vector& impulse) const { (void)t, (void)impulse; return 0; }
+
+  // Initial condition (IC=) written into x0 for a uic start.
+  virtual void initial_condition(Vector& x0) const { (void)x0; }
+
+ private:
+  std::string name_;
+  int first_predicate_ = 0;
+};
+
+// Factories keyed by element letter ("d:ideal" for the ideal diode model).
+using DeviceFactory = std::function<std::unique_ptr<Device>(const ElementSpec&, const RunSettings&)>;
+class DeviceRegistry {
+ public:
+  static DeviceRegistry& instance();
+  void add(const std::string& key, DeviceFactory factory);
+  const DeviceFactory* find(const std::string& key) const;
+
+ private:
+  std::vector<std::pair<std::string, DeviceFactory>> factories_;
+};
+// A static instance of this in a device's file registers it.
+struct Registration {
+  Registration(const std::string& key, DeviceFactory factory) {
+    DeviceRegistry::instance().add(key, std::move(factory));
+  }
+};
+
+// Model parameter lookup with a default.
+double parameter(const ElementSpec& spec, const std::string& name, double fallback);
+
+}  // namespace mna
+
+namespace mna {
+// Throws ModelError unless the element has exactly `count` nodes.
+void require_nodes(const ElementSpec& spec, std::size_t count);
+}  // namespace mna

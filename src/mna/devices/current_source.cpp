@@ -1,0 +1,34 @@
+// I: current I(t) from node a through the source to node b.
+#include "mna/device.hpp"
+#include "mna/waveform.hpp"
+
+namespace mna {
+namespace {
+
+class CurrentSource final : public Device {
+ public:
+  CurrentSource(const ElementSpec& spec, const RunSettings& run)
+      : Device(spec.name), nodes_(spec.nodes), function_(spec.waveform, spec.value, run, spec.name) {
+    require_nodes(spec, 2);
+  }
+  void allocate(Unknowns& u) override { a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]); }
+  void declare(Stamper&) override {}
+  void load(Evaluation& e) const override {
+    const double i = function_.value(e.t);
+    e.f(a_, i), e.f(b_, -i);
+  }
+  void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::current_defined, name()}); }
+  double next_time_event(double t) const override { return function_.next_corner(t); }
+
+ private:
+  std::vector<std::string> nodes_;
+  SourceFunction function_;
+  int a_ = ground, b_ = ground;
+};
+
+const Registration registration("i", [](const ElementSpec& spec, const RunSettings& run) {
+  return std::make_unique<CurrentSource>(spec, run);
+});
+
+}  // namespace
+}  // namespace mna

@@ -1,0 +1,142 @@
+// D: the junction diode with ngspice's equations (level 1: IS, N, RS, CJO, VJ, M, FC, TT, BV,
+// IBV, area), for regression against ngspice. The junction current, its charge and GMIN in
+// parallel are loaded at the junction voltage; RS adds an internal node.
+// Newton may try huge forward voltages: above EXPONENT_LIMIT thermal voltages the exponential
+// continues linearly (value and slope match), so f stays smooth and finite; ngspice limits the
+// iterate instead (pnjlim), which leaves converged solutions below that limit unchanged.
+#include <cmath>
+#include <numbers>
+#include <optional>
+
+#include "mna/device.hpp"
+
+namespace mna {
+namespace {
+
+constexpr double boltzmann = 1.38064852e-23;   // ngspice 39 const.h
+constexpr double charge = 1.6021766208e-19;
+constexpr double nominal_temperature = 300.15; // 27 C
+constexpr double gmin = 1e-12;
+constexpr double exponent_limit = 40;
+
+class Diode final : public Device {
+ public:
+  explicit Diode(const ElementSpec& spec) : Device(spec.name), nodes_(spec.nodes) {
+    require_nodes(spec, 2);
+    const double area = spec.area;
+    saturation_current_ = parameter(spec, "is", 1e-14) * area;
+    thermal_voltage_ = parameter(spec, "n", 1) * boltzmann * nominal_temperature / charge;
+    series_resistance_ = parameter(spec, "rs", 0) / area;
+    junction_capacitance_ = parameter(spec, "cjo", parameter(spec, "cj0", 0)) * area;
+    junction_potential_ = parameter(spec, "vj", 1);
+    grading_ = parameter(spec, "m", 0.5);
+    depletion_fraction_ = parameter(spec, "fc", 0.5);
+    transit_time_ = parameter(spec, "tt", 0);
+    if (!(saturation_current_ > 0) || !(thermal_voltage_ > 0) || !(series_resistance_ >= 0) ||
+        !(junction_potential_ > 0) || !(grading_ < 1) || !(depletion_fraction_ < 1))
+      throw ModelError("diode '" + spec.name + "': parameters out of range (IS, N > 0, RS >= 0, VJ > 0, M < 1, FC < 1)");
+    if (auto bv = spec.model.find("bv"); bv != spec.model.end() && std::isfinite(bv->second))
+      breakdown_voltage_ = breakdown_knee(bv->second, parameter(spec, "ibv", 1e-3) * area);
+  }
+
+  void allocate(Unknowns& u) override {
+    anode_ = u.node(nodes_[0]), cathode_ = u.node(nodes_[1]);
+    junction_ = anode_;
+    if (series_resistance_ > 0)
+      junction_ = u.add("v(" + name() + "#internal)", UnknownCategory::internal_node, name());
+  }
+  void declare(Stamper& s) override {
+    s.block(junction_, cathode_, junction_slots_);
+    if (junction_capacitance_ > 0 || transit_time_ > 0) s.charge_block(junction_, cathode_, junction_slots_);
+    if (series_resistance_ > 0) s.block(anode_, junction_, series_slots_);
+  }
+  void load(Evaluation& e) const override {
+    const double v = e.value(junction_) - e.value(cathode_);
+    const auto [current, conductance] = junction_current(v);
+    const double i = current + gmin * v;
+    e.f(junction_, i), e.f(cathode_, -i);
+    const bool charged = junction_capacitance_ > 0 || transit_time_ > 0;
+    double capacitance = 0;
+    if (charged) {
+      const auto [q, c] = junction_charge(v);
+      const double total = q + transit_time_ * current;
+      capacitance = c + transit_time_ * conductance;
+      e.q(junction_, total), e.q(cathode_, -total);
+    }
+    if (series_resistance_ > 0) {
+      const double g = 1 / series_resistance_, ir = g * (e.value(anode_) - e.value(junction_));
+      e.f(anode_, ir), e.f(junction_, -ir);
+      if (e.jacobian()) e.df(series_slots_, g);
+    }
+    if (!e.jacobian()) return;
+    e.df(junction_slots_, conductance + gmin);
+    if (charged) e.dq(junction_slots_, capacitance);
+  }
+  void edges(std::vector<Edge>& out) const override {
+    out.push_back({anode_, cathode_, Connection::conductive, name()});
+  }
+
+  // Junction current without GMIN and its derivative (ngspice dioload.c: forward exponential,
+  // reverse cubic above -3 N Vt, breakdown exponential beyond the knee).
+  std::pair<double, double> junction_current(double v) const {
+    const double is = saturation_current_, vt = thermal_voltage_;
+    if (v >= -3 * vt) {
+      const double x = v / vt;
+      const double ex = x > exponent_limit ? std::exp(exponent_limit) * (1 + x - exponent_limit) : std::exp(x);
+      const double dex = x > exponent_limit ? std::exp(exponent_limit) : std::exp(x);
+      return {is * (ex - 1), is * dex / vt};
+    }
+    if (!breakdown_voltage_ || v >= -*breakdown_voltage_) {
+      double a = 3 * vt / (v * std::numbers::e);
+      a = a * a * a;
+      return {-is * (1 + a), is * 3 * a / v};
+    }
+    const double x = -(*breakdown_voltage_ + v) / vt;
+    const double ex = x > exponent_limit ? std::exp(exponent_limit) * (1 + x - exponent_limit) : std::exp(x);
+    const double dex = x > exponent_limit ? std::exp(exponent_limit) : std::exp(x);
+    return {-is * ex, is * dex / vt};
+  }
+
+  // Depletion charge and capacitance (SPICE: power law below FC VJ, linear extrapolation of the
+  // capacitance above).
+  std::pair<double, double> junction_charge(double v) const {
+    const double cj = junction_capacitance_, vj = junction_potential_, m = grading_, fc = depletion_fraction_;
+    if (cj == 0) return {0, 0};
+    if (v < fc * vj) {
+      const double arg = 1 - v / vj, sarg = std::exp(-m * std::log(arg));
+      return {vj * cj * (1 - arg * sarg) / (1 - m), cj * sarg};
+    }
+    const double f1 = vj * (1 - std::pow(1 - fc, 1 - m)) / (1 - m);
+    const double f2 = std::pow(1 - fc, 1 + m), f3 = 1 - fc * (1 + m);
+    const double q = cj * f1 + cj / f2 * (f3 * (v - fc * vj) + m / (2 * vj) * (v * v - fc * vj * fc * vj));
+    return {q, cj / f2 * (f3 + m * v / vj)};
+  }
+
+ private:
+  // ngspice's knee (diotemp.c): the voltage where the breakdown current equals IBV.
+  double breakdown_knee(double bv, double ibv) const {
+    const double is = saturation_current_, vt = thermal_voltage_;
+    if (ibv < is * bv / vt) return bv;
+    double knee = bv - vt * std::log(1 + ibv / is);
+    for (int k = 0; k < 25; ++k) {
+      knee = bv - vt * std::log(ibv / is + 1 - knee / vt);
+      const double current = is * (std::exp((bv - knee) / vt) - 1 + knee / vt);
+      if (std::abs(current - ibv) <= 1e-3 * ibv) break;
+    }
+    return knee;
+  }
+
+  std::vector<std::string> nodes_;
+  double saturation_current_, thermal_voltage_, series_resistance_, junction_capacitance_;
+  double junction_potential_, grading_, depletion_fraction_, transit_time_;
+  std::optional<double> breakdown_voltage_;
+  int anode_ = ground, cathode_ = ground, junction_ = ground;
+  Stamper::Block junction_slots_, series_slots_;
+};
+
+const Registration registration("d", [](const ElementSpec& spec, const RunSettings&) {
+  return std::make_unique<Diode>(spec);
+});
+
+}  // namespace
+}  // namespace mna

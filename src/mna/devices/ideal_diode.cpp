@@ -1,0 +1,71 @@
+// Ideal diode (.model D with IDEAL=1): a predicate with its on/off mode held in an auxiliary
+// unknown. Off -> on when the voltage exceeds VFWD, on -> off when the current falls below 0:
+//     guard = mode ? i : (va - vk - VFWD)
+// Branch current i from anode to cathode; row: on: (va - vk - VFWD) - RON i = 0; off: i = 0
+// (ROFF infinite, the default) or (va - vk) - ROFF i = 0.
+#include <cmath>
+
+#include "mna/device.hpp"
+
+namespace mna {
+namespace {
+
+class IdealDiode final : public Device {
+ public:
+  explicit IdealDiode(const ElementSpec& spec)
+      : Device(spec.name), nodes_(spec.nodes), on_resistance_(parameter(spec, "ron", 0)),
+        off_resistance_(parameter(spec, "roff", infinity)), forward_voltage_(parameter(spec, "vfwd", 0)) {
+    require_nodes(spec, 2);
+    if (!(on_resistance_ >= 0) || !std::isfinite(on_resistance_) || !(off_resistance_ > on_resistance_))
+      throw ModelError("diode '" + spec.name + "': need 0 <= RON < ROFF, RON finite");
+  }
+  void allocate(Unknowns& u) override {
+    a_ = u.node(nodes_[0]), k_ = u.node(nodes_[1]);
+    branch_ = u.add("i(" + name() + ")", UnknownCategory::branch_current, name());
+    mode_ = u.add("mode(" + name() + ")", UnknownCategory::auxiliary, name());
+  }
+  void declare(Stamper& s) override {
+    s.entry(a_, branch_, slot_a_branch_), s.entry(k_, branch_, slot_k_branch_);
+    s.entry(branch_, a_, slot_branch_a_), s.entry(branch_, k_, slot_branch_k_);
+    s.entry(branch_, branch_, slot_branch_branch_);
+  }
+  void load(Evaluation& e) const override {
+    const bool on = e.p[first_predicate()];
+    const double v = e.value(a_) - e.value(k_), i = e.value(branch_);
+    e.f(a_, i), e.f(k_, -i);
+    double alpha = 1, beta = on_resistance_, offset = forward_voltage_;
+    if (!on) {
+      offset = 0;
+      if (std::isinf(off_resistance_)) alpha = 0, beta = 1;
+      else beta = off_resistance_;
+    }
+    e.f(branch_, alpha * (v - offset) - beta * i);
+    if (!e.jacobian()) return;
+    e.df(slot_a_branch_, 1), e.df(slot_k_branch_, -1);
+    e.df(slot_branch_a_, alpha), e.df(slot_branch_k_, -alpha), e.df(slot_branch_branch_, -beta);
+  }
+  void edges(std::vector<Edge>& out) const override { out.push_back({a_, k_, Connection::conductive, name()}); }
+
+  int predicate_count() const override { return 1; }
+  std::string predicate_label(int) const override { return "conducting"; }
+  void guards(double, const Vector& x, double* out) const override {
+    const bool mode = x[mode_] > 0.5;
+    out[0] = mode ? x[branch_] : (a_ == ground ? 0 : x[a_]) - (k_ == ground ? 0 : x[k_]) - forward_voltage_;
+  }
+  void jump_entries(std::vector<padae::JumpEntry>& out) const override {
+    out.push_back({mode_, first_predicate(), 1.0});
+  }
+
+ private:
+  std::vector<std::string> nodes_;
+  double on_resistance_, off_resistance_, forward_voltage_;
+  int a_ = ground, k_ = ground, branch_ = ground, mode_ = ground;
+  int slot_a_branch_ = -1, slot_k_branch_ = -1, slot_branch_a_ = -1, slot_branch_k_ = -1, slot_branch_branch_ = -1;
+};
+
+const Registration registration("d:ideal", [](const ElementSpec& spec, const RunSettings&) {
+  return std::make_unique<IdealDiode>(spec);
+});
+
+}  // namespace
+}  // namespace mna

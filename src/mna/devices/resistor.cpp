@@ -1,0 +1,35 @@
+// R: i = (va - vb) / R, leaving node a.
+#include "mna/device.hpp"
+
+namespace mna {
+namespace {
+
+class Resistor final : public Device {
+ public:
+  explicit Resistor(const ElementSpec& spec) : Device(spec.name), nodes_(spec.nodes), conductance_(1 / spec.value) {
+    require_nodes(spec, 2);
+    if (!(spec.value != 0) || !std::isfinite(spec.value))
+      throw ModelError("resistor '" + spec.name + "': resistance must be finite and non-zero");
+  }
+  void allocate(Unknowns& u) override { a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]); }
+  void declare(Stamper& s) override { s.block(a_, b_, slots_); }
+  void load(Evaluation& e) const override {
+    const double i = conductance_ * (e.value(a_) - e.value(b_));
+    e.f(a_, i), e.f(b_, -i);
+    if (e.jacobian()) e.df(slots_, conductance_);
+  }
+  void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::conductive, name()}); }
+
+ private:
+  std::vector<std::string> nodes_;
+  double conductance_;
+  int a_ = ground, b_ = ground;
+  Stamper::Block slots_;
+};
+
+const Registration registration("r", [](const ElementSpec& spec, const RunSettings&) {
+  return std::make_unique<Resistor>(spec);
+});
+
+}  // namespace
+}  // namespace mna

@@ -1,0 +1,258 @@
+#include "mna/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cctype>
+
+namespace mna {
+
+// ---- Unknowns -------------------------------------------------------------------------------
+
+int Unknowns::node(const std::string& name) {
+  if (name == "0" || name == "gnd") return ground;
+  const std::string label = "v(" + name + ")";
+  for (int i = 0; i < size(); ++i)
+    if (categories_[i] == UnknownCategory::node_voltage && owners_[i] == name) return i;
+  return add(label, UnknownCategory::node_voltage, name);
+}
+
+int Unknowns::add(std::string label, UnknownCategory category, std::string owner) {
+  labels_.push_back(std::move(label));
+  categories_.push_back(category);
+  owners_.push_back(std::move(owner));
+  return size() - 1;
+}
+
+bool Unknowns::has_branch(const std::string& element) const {
+  for (int i = 0; i < size(); ++i)
+    if (categories_[i] == UnknownCategory::branch_current && owners_[i] == element) return true;
+  return false;
+}
+
+int Unknowns::branch(const std::string& element) const {
+  for (int i = 0; i < size(); ++i)
+    if (categories_[i] == UnknownCategory::branch_current && owners_[i] == element) return i;
+  throw ModelError("element '" + element +
+                   "' has no branch current (the controlling element must be a voltage source, "
+                   "inductor or other element with a current unknown)");
+}
+
+// ---- Stamper --------------------------------------------------------------------------------
+
+void Stamper::declare(int row, int column, int& slot, bool charge) {
+  slot = -1;
+  if (row == ground || column == ground) return;
+  declared_.push_back({row, column, &slot, charge});
+}
+
+const Device* Stamper::device(const std::string& name) const {
+  for (const auto& d : devices_)
+    if (d->name() == name) return d.get();
+  return nullptr;
+}
+
+padae::Pattern Stamper::build_pattern(int size) {
+  std::vector<std::pair<int, int>> entries;
+  entries.reserve(declared_.size());
+  for (const auto& d : declared_) entries.emplace_back(d.row, d.column);
+  padae::Pattern pattern(size, entries);
+  for (const auto& d : declared_) *d.slot = pattern.index(d.row, d.column);
+  return pattern;
+}
+
+std::vector<bool> Stamper::charged_columns(int size) const {
+  std::vector<bool> charged(size, false);
+  for (const auto& d : declared_)
+    if (d.charge) charged[d.column] = true;
+  return charged;
+}
+
+// ---- Registry -------------------------------------------------------------------------------
+
+DeviceRegistry& DeviceRegistry::instance() {
+  static DeviceRegistry registry;
+  return registry;
+}
+
+void DeviceRegistry::add(const std::string& key, DeviceFactory factory) {
+  factories_.emplace_back(key, std::move(factory));
+}
+
+const DeviceFactory* DeviceRegistry::find(const std::string& key) const {
+  for (const auto& [k, factory] : factories_)
+    if (k == key) return &factory;
+  return nullptr;
+}
+
+double parameter(const ElementSpec& spec, const std::string& name, double fallback) {
+  auto it = spec.model.find(name);
+  return it == spec.model.end() ? fallback : it->second;
+}
+
+// ---- Model ----------------------------------------------------------------------------------
+
+namespace {
+
+std::string registry_key(const ElementSpec& spec) {
+  std::string key(1, static_cast<char>(std::tolower(static_cast<unsigned char>(spec.type))));
+  if (key == "d" && parameter(spec, "ideal", 0) != 0) key += ":ideal";
+  return key;
+}
+
+}  // namespace
+
+Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
+  // Circuit nodes first, in order of appearance, so that v(...) unknowns come first.
+  for (const auto& spec : circuit.elements)
+    for (const auto& n : spec.nodes) unknowns_.node(n);
+  for (const auto& spec : circuit.elements) {
+    const DeviceFactory* factory = DeviceRegistry::instance().find(registry_key(spec));
+    if (!factory) throw ModelError("element '" + spec.name + "': unsupported element type");
+    devices_.push_back((*factory)(spec, settings));
+  }
+  for (auto& d : devices_) d->allocate(unknowns_);
+
+  Stamper stamper(unknowns_, devices_);
+  for (auto& d : devices_) d->declare(stamper);
+  for (const auto& [name, value] : circuit.initial_voltages) {
+    const int n = find_node(name);
+    if (n == -2) throw ModelError(".ic names node '" + name + "', which is not in the circuit");
+    if (n != ground) held_nodes_[n] = value;
+  }
+  // Held rows become v - v_ic = 0: their diagonal must exist (it always does, see Pattern).
+  pattern_ = stamper.build_pattern(size());
+
+  const std::vector<bool> charged = stamper.charged_columns(size());
+  kinds_.resize(size());
+  for (int i = 0; i < size(); ++i) {
+    if (unknowns_.category(i) == UnknownCategory::auxiliary)
+      kinds_[i] = padae::UnknownKind::auxiliary;
+    else
+      kinds_[i] = charged[i] ? padae::UnknownKind::differential : padae::UnknownKind::algebraic;
+  }
+
+  for (std::size_t d = 0; d < devices_.size(); ++d) {
+    devices_[d]->set_first_predicate(predicate_count_);
+    predicate_count_ += devices_[d]->predicate_count();
+    predicate_owners_.insert(predicate_owners_.end(), devices_[d]->predicate_count(), static_cast<int>(d));
+    devices_[d]->jump_entries(jump_entries_);
+  }
+
+  // Positions of every entry in each held row, to overwrite the row during the operating point.
+  for (const auto& [n, value] : held_nodes_) {
+    std::vector<int> slots;
+    for (int column = 0; column < size(); ++column)
+      if (int s = pattern_.find(n, column); s >= 0) slots.push_back(s);
+    held_row_slots_.push_back(std::move(slots));
+    held_diagonal_slots_.push_back(pattern_.index(n, n));
+  }
+}
+
+padae::EvalStatus Model::load(double t, const Vector& x, const padae::Predicates& p, padae::Load& out) {
+  Evaluation e(t, x, p, out);
+  for (const auto& d : devices_) d->load(e);
+  if (holding_) hold_rows(x, out);
+  for (int i = 0; i < size(); ++i)
+    if (!std::isfinite(out.f[i]) || !std::isfinite(out.q[i])) return padae::EvalStatus::outside_domain;
+  return padae::EvalStatus::ok;
+}
+
+void Model::hold_rows(const Vector& x, padae::Load& out) const {
+  std::size_t k = 0;
+  for (const auto& [n, value] : held_nodes_) {
+    out.f[n] = x[n] - value;
+    out.q[n] = 0;
+    if (out.jacobian_requested) {
+      for (int s : held_row_slots_[k]) out.df_dx[s] = out.dq_dx[s] = 0;
+      out.df_dx[held_diagonal_slots_[k]] = 1;
+    }
+    ++k;
+  }
+}
+
+padae::EvalStatus Model::guards(double t, const Vector& x, Vector& out) const {
+  for (const auto& d : devices_)
+    if (d->predicate_count() > 0) d->guards(t, x, out.data() + d->first_predicate());
+  for (int k = 0; k < predicate_count_; ++k)
+    if (!std::isfinite(out[k])) return padae::EvalStatus::outside_domain;
+  return padae::EvalStatus::ok;
+}
+
+void Model::jump_matrix(double, const Vector&, const padae::Predicates&,
+                        std::vector<padae::JumpEntry>& out) const {
+  out.insert(out.end(), jump_entries_.begin(), jump_entries_.end());
+}
+
+double Model::next_time_event(double t) const {
+  double next = infinity;
+  for (const auto& d : devices_) next = std::min(next, d->next_time_event(t));
+  return next;
+}
+
+double Model::absolute_tolerance(int unknown, double) const {
+  switch (unknowns_.category(unknown)) {
+    case UnknownCategory::node_voltage:
+    case UnknownCategory::internal_node: return tolerances_.voltage;
+    case UnknownCategory::branch_current: return tolerances_.current;
+    case UnknownCategory::auxiliary: return 1.0;  // a 0/1 mode, never integrated
+  }
+  return tolerances_.voltage;
+}
+
+const Device* Model::device(const std::string& name) const {
+  for (const auto& d : devices_)
+    if (d->name() == name) return d.get();
+  return nullptr;
+}
+
+int Model::find_node(const std::string& name) const {
+  if (name == "0" || name == "gnd") return ground;
+  for (int i = 0; i < size(); ++i)
+    if (unknowns_.category(i) == UnknownCategory::node_voltage && unknowns_.owner(i) == name) return i;
+  return -2;
+}
+
+const Device& Model::predicate_owner(int predicate) const {
+  return *devices_.at(predicate_owners_.at(predicate));
+}
+
+std::string Model::predicate_label(int predicate) const {
+  const Device& owner = predicate_owner(predicate);
+  return owner.predicate_label(predicate - owner.first_predicate());
+}
+
+Vector Model::initial_conditions() const {
+  Vector x0 = Vector::Zero(size());
+  for (const auto& d : devices_) d->initial_auxiliaries(x0);
+  for (const auto& d : devices_) d->initial_condition(x0);
+  for (const auto& [n, value] : held_nodes_) x0[n] = value;
+  return x0;
+}
+
+double Model::stored_energy(const Vector& x) const {
+  double energy = 0;
+  for (const auto& d : devices_) energy += d->stored_energy(x);
+  return energy;
+}
+
+double Model::jump_dissipation(const padae::EventRecord& event) const {
+  double delivered = 0;
+  for (const auto& d : devices_) delivered += d->delivered_energy(event.t, event.impulse);
+  return stored_energy(event.x_before) + delivered - stored_energy(event.x_after);
+}
+
+std::vector<Edge> Model::edges() const {
+  std::vector<Edge> all;
+  for (const auto& d : devices_) d->edges(all);
+  return all;
+}
+
+}  // namespace mna
+
+namespace mna {
+void require_nodes(const ElementSpec& spec, std::size_t count) {
+  if (spec.nodes.size() != count)
+    throw ModelError("element '" + spec.name + "' needs " + std::to_string(count) + " nodes, has " +
+                     std::to_string(spec.nodes.size()));
+}
+}  // namespace mna

@@ -1,0 +1,83 @@
+// A flat circuit as a predicate DAE (padae::System): modified nodal analysis in charge/flux
+// form. Unknowns are node voltages (ground excluded), then the branch currents, internal nodes
+// and auxiliary mode variables the devices allocate.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "mna/circuit_spec.hpp"
+#include "mna/device.hpp"
+#include "padae/system.hpp"
+
+namespace mna {
+
+struct Tolerances {
+  double voltage = 1e-6;   // node voltages (ngspice's VNTOL)
+  double current = 1e-12;  // branch currents (ngspice's ABSTOL)
+};
+
+class Model final : public padae::System {
+ public:
+  // Throws ModelError for an unknown element type, a missing controlling element or a bad
+  // parameter.
+  Model(const CircuitSpec& circuit, const RunSettings& settings);
+
+  int size() const override { return unknowns_.size(); }
+  padae::UnknownKind kind(int unknown) const override { return kinds_[unknown]; }
+  const padae::Pattern& pattern() const override { return pattern_; }
+  padae::EvalStatus load(double t, const Vector& x, const padae::Predicates& p, padae::Load& out) override;
+  int predicate_count() const override { return predicate_count_; }
+  padae::EvalStatus guards(double t, const Vector& x, Vector& out) const override;
+  bool has_jumps() const override { return !jump_entries_.empty(); }
+  void jump_matrix(double t, const Vector& x, const padae::Predicates& p,
+                   std::vector<padae::JumpEntry>& out) const override;
+  double next_time_event(double t) const override;
+  double absolute_tolerance(int unknown, double default_atol) const override;
+
+  void set_tolerances(const Tolerances& tolerances) { tolerances_ = tolerances; }
+  const Unknowns& unknowns() const { return unknowns_; }
+  const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }
+  const Device* device(const std::string& name) const;
+  // Node index or ground; -2 when the circuit has no such node.
+  int find_node(const std::string& name) const;
+
+  // Who owns predicate k, and what it means ("state", "v(a)>v(b)", ...).
+  const Device& predicate_owner(int predicate) const;
+  std::string predicate_label(int predicate) const;
+
+  // x0 for a start from initial conditions (uic): IC= of capacitors and inductors, .ic node
+  // voltages, switch ON/OFF; everything else 0.
+  Vector initial_conditions() const;
+  // The .ic node voltages: held fixed while computing the operating point (as ngspice does).
+  const std::map<int, double>& held_nodes() const { return held_nodes_; }
+  void hold_initial_voltages(bool hold) { holding_ = hold; }
+
+  // Energy in capacitors and inductors at x; energy a jump dissipated (stored before + delivered
+  // by sources during the jump - stored after).
+  double stored_energy(const Vector& x) const;
+  double jump_dissipation(const padae::EventRecord& event) const;
+
+  // Connections of every device, for the structural checks.
+  std::vector<Edge> edges() const;
+
+ private:
+  void hold_rows(const Vector& x, padae::Load& out) const;
+
+  Unknowns unknowns_;
+  std::vector<std::unique_ptr<Device>> devices_;
+  padae::Pattern pattern_;
+  std::vector<padae::UnknownKind> kinds_;
+  std::vector<padae::JumpEntry> jump_entries_;
+  std::vector<int> predicate_owners_;  // device index of each predicate
+  int predicate_count_ = 0;
+  Tolerances tolerances_;
+  std::map<int, double> held_nodes_;
+  std::vector<std::vector<int>> held_row_slots_;  // value positions in each held row
+  std::vector<int> held_diagonal_slots_;
+  bool holding_ = false;
+};
+
+}  // namespace mna

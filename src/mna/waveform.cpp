@@ -1,0 +1,140 @@
+#include "mna/waveform.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "mna/device.hpp"
+
+namespace mna {
+
+namespace {
+
+// PULSE(V1 V2 TD TR TF PW PER NP), SIN(VO VA FREQ TD THETA PHASE), EXP(V1 V2 TD1 TAU1 TD2 TAU2)
+std::vector<double> with_defaults(Waveform::Shape shape, std::vector<double> p, const RunSettings& run,
+                                  const std::string& element) {
+  const double tstep = run.tstep > 0 ? run.tstep : run.tstop / 50;
+  auto fill = [&](std::size_t count, std::size_t minimum) {
+    if (p.size() < minimum || p.size() > count)
+      throw ModelError("element '" + element + "': source function expects " + std::to_string(minimum) +
+                       " to " + std::to_string(count) + " parameters, got " + std::to_string(p.size()));
+    p.resize(count, std::nan(""));
+  };
+  auto given = [&](std::size_t i) { return !std::isnan(p[i]); };
+  switch (shape) {
+    case Waveform::Shape::constant: break;
+    case Waveform::Shape::pulse:
+      fill(8, 2);
+      if (!given(2)) p[2] = 0;
+      // ngspice: a zero or omitted rise/fall time means TSTEP; width and period default to TSTOP.
+      if (!given(3) || p[3] == 0) p[3] = tstep;
+      if (!given(4) || p[4] == 0) p[4] = tstep;
+      if (!given(5)) p[5] = run.tstop;
+      if (!given(6) || p[6] == 0) p[6] = run.tstop;
+      if (!given(7)) p[7] = 0;  // number of pulses, 0: unlimited
+      break;
+    case Waveform::Shape::sine:
+      fill(6, 2);
+      if (!given(2)) p[2] = run.tstop > 0 ? 1 / run.tstop : 0;
+      for (int i : {3, 4, 5})
+        if (!given(i)) p[i] = 0;
+      break;
+    case Waveform::Shape::exponential:
+      fill(6, 2);
+      if (!given(2)) p[2] = 0;
+      if (!given(3) || p[3] == 0) p[3] = tstep;
+      if (!given(4) || p[4] == 0) p[4] = p[2] + tstep;
+      if (!given(5) || p[5] == 0) p[5] = tstep;
+      break;
+    case Waveform::Shape::piecewise_linear:
+      if (p.size() < 2 || p.size() % 2 != 0)
+        throw ModelError("element '" + element + "': PWL needs time-value pairs");
+      for (std::size_t i = 2; i < p.size(); i += 2)
+        if (p[i] < p[i - 2])
+          throw ModelError("element '" + element + "': PWL times must not decrease");
+      break;
+  }
+  return p;
+}
+
+}  // namespace
+
+SourceFunction::SourceFunction(const Waveform& waveform, double dc_value, const RunSettings& run,
+                               const std::string& element)
+    : shape_(waveform.shape), p_(with_defaults(waveform.shape, waveform.parameters, run, element)), dc_(dc_value) {}
+
+double SourceFunction::value(double t) const {
+  using std::numbers::pi;
+  switch (shape_) {
+    case Waveform::Shape::constant: return dc_;
+    case Waveform::Shape::pulse: {
+      const double v1 = p_[0], v2 = p_[1], td = p_[2], tr = p_[3], tf = p_[4], pw = p_[5], per = p_[6];
+      if (t <= td) return v1;
+      double local = t - td;
+      const double periods = std::floor(local / per);
+      if (p_[7] <= 0 || periods < p_[7]) local -= periods * per;
+      else local -= (p_[7] - 1) * per;  // after the last pulse: stays at its end value
+      if (local < tr) return v1 + (v2 - v1) * local / tr;
+      if (local <= tr + pw) return v2;
+      if (local < tr + pw + tf) return v2 + (v1 - v2) * (local - tr - pw) / tf;
+      return v1;
+    }
+    case Waveform::Shape::sine: {
+      const double vo = p_[0], va = p_[1], freq = p_[2], td = p_[3], theta = p_[4];
+      const double phase = p_[5] * pi / 180;
+      if (t <= td) return vo + va * std::sin(phase);
+      return vo + va * std::sin(2 * pi * freq * (t - td) + phase) * std::exp(-(t - td) * theta);
+    }
+    case Waveform::Shape::exponential: {
+      const double v1 = p_[0], v2 = p_[1], td1 = p_[2], tau1 = p_[3], td2 = p_[4], tau2 = p_[5];
+      double v = v1;
+      if (t > td1) v += (v2 - v1) * (1 - std::exp(-(t - td1) / tau1));
+      if (t > td2) v += (v1 - v2) * (1 - std::exp(-(t - td2) / tau2));
+      return v;
+    }
+    case Waveform::Shape::piecewise_linear: {
+      const std::size_t n = p_.size() / 2;
+      if (t <= p_[0]) return p_[1];
+      for (std::size_t k = 1; k < n; ++k) {
+        const double t0 = p_[2 * k - 2], t1 = p_[2 * k];
+        if (t <= t1) {
+          if (t1 == t0) return p_[2 * k + 1];
+          return p_[2 * k - 1] + (p_[2 * k + 1] - p_[2 * k - 1]) * (t - t0) / (t1 - t0);
+        }
+      }
+      return p_[2 * n - 1];
+    }
+  }
+  return dc_;
+}
+
+double SourceFunction::next_corner(double t) const {
+  switch (shape_) {
+    case Waveform::Shape::constant: return infinity;
+    case Waveform::Shape::pulse: {
+      const double td = p_[2], tr = p_[3], tf = p_[4], pw = p_[5], per = p_[6];
+      const double offsets[] = {0, tr, tr + pw, tr + pw + tf};
+      // Corners of the period containing t, then of the next one.
+      double first_period = t <= td ? 0 : std::floor((t - td) / per);
+      for (double k = std::max(0.0, first_period - 1); k <= first_period + 1; ++k) {
+        if (p_[7] > 0 && k >= p_[7]) break;
+        for (double offset : offsets) {
+          const double corner = td + k * per + offset;
+          if (corner > t) return corner;
+        }
+      }
+      return infinity;
+    }
+    case Waveform::Shape::sine: return p_[3] > t ? p_[3] : infinity;
+    case Waveform::Shape::exponential:
+      if (p_[2] > t) return p_[2];
+      return p_[4] > t ? p_[4] : infinity;
+    case Waveform::Shape::piecewise_linear:
+      for (std::size_t i = 0; i < p_.size(); i += 2)
+        if (p_[i] > t) return p_[i];
+      return infinity;
+  }
+  return infinity;
+}
+
+}  // namespace mna

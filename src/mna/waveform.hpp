@@ -1,0 +1,29 @@
+// Independent-source time functions with ngspice's semantics and defaults: PULSE, SIN, EXP,
+// PWL. Each also lists its corners, the instants where it is not smooth, which the integrator
+// must hit exactly.
+#pragma once
+
+#include <vector>
+
+#include "mna/circuit_spec.hpp"
+
+namespace mna {
+
+class SourceFunction {
+ public:
+  // Fills omitted parameters with ngspice's defaults (TSTEP, TSTOP from the run); throws
+  // ModelError for too many parameters or a PWL whose times decrease.
+  SourceFunction(const Waveform& waveform, double dc_value, const RunSettings& run,
+                 const std::string& element);
+
+  double value(double t) const;
+  // First corner strictly after t, or +infinity.
+  double next_corner(double t) const;
+
+ private:
+  Waveform::Shape shape_;
+  std::vector<double> p_;  // parameters with defaults filled in
+  double dc_;
+};
+
+}  // namespace mna

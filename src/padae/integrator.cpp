@@ -1,0 +1,644 @@
+// Variable-order variable-step BDF in fixed-leading-coefficient form (Brenan, Campbell and
+// Petzold; the algorithm of DASSL and SUNDIALS IDA), applied to d/dt q(x) + f(t, x) = 0: the
+// history is kept both for x (to predict Newton's starting point) and for q (the quantity the
+// BDF formula differentiates, so charge is conserved, and the one whose error is tested).
+//
+// A step reads: choose h -> set coefficients -> predict -> correct (modified Newton) ->
+// error test -> accept (complete step, choose order and h) or reject (restore, shrink) ->
+// look for predicate changes in the step -> handle an event (locate, jump, re-initialize,
+// restart at order 1).
+#include "padae/integrator.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+#include "padae/newton_matrix.hpp"
+#include "padae/reinitialization.hpp"
+#include "padae/root_finder.hpp"
+
+namespace padae {
+
+namespace {
+
+constexpr int kMaxOrder = 5;
+constexpr int kHistory = kMaxOrder + 2;
+constexpr int kMaxNewtonIterations = 4;
+constexpr double kNewtonTolerance = 0.33;   // of the error-test tolerance (IDA's epcon)
+constexpr double kMaxConvergenceRate = 0.9;
+constexpr int kMaxErrorTestFailures = 10;
+constexpr int kMaxNewtonFailures = 10;
+constexpr int kStepsBetweenJacobians = 20;
+constexpr double kJacobianCjChange = 0.25;  // refactor when cj moved by more than this fraction
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+double weighted_max_norm(const Vector& v, const Vector& inverse_weight, int* worst = nullptr) {
+  double largest = 0;
+  int where = -1;
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    double scaled = std::abs(v[i]) * inverse_weight[i];
+    if (scaled > largest || std::isnan(scaled)) {
+      largest = std::isnan(scaled) ? std::numeric_limits<double>::infinity() : scaled;
+      where = static_cast<int>(i);
+    }
+  }
+  if (worst) *worst = where;
+  return largest;
+}
+
+std::string format_time(double t) {
+  std::ostringstream text;
+  text.precision(17);
+  text << t;
+  return text.str();
+}
+
+}  // namespace
+
+struct Integrator::Impl {
+  Impl(System& system_in, Options options_in);
+
+  // --- steps -----------------------------------------------------------------------------
+  StepOutcome step(double t_stop);
+  void set_coefficients();
+  void predict();
+  enum class Correction { converged, diverged, outside_domain, singular };
+  Correction correct(double t_new, bool fresh_matrix);
+  bool error_test(double& error_k, double& error_k_minus_1, int& order_new);
+  void complete_step(double error_k, double error_k_minus_1, int order_new);
+  void restore();
+  void update_weights();
+  double minimum_step() const;
+
+  Vector interpolate(double t_at) const;
+
+  // --- events ----------------------------------------------------------------------------
+  bool evaluate_guards(double t_at, const Vector& x_at, Vector& out) const;
+  StepOutcome handle_state_event(double t_old, const Vector& guards_old);
+  bool settle(double t_at, const Vector& x_start, const Predicates& target,
+              bool record_flips);
+  void restart(double t_at, const ConsistentState& consistent);
+
+  StepOutcome fail(double t_at, std::string reason, int unknown = -1) {
+    failure = Failure{t_at, std::move(reason), unknown};
+    return {StepKind::failed, t_at};
+  }
+
+  System& system;
+  Options options;
+  const int n;
+  const int predicate_count;
+  Statistics statistics;
+  Vector absolute_tolerance;
+  NewtonMatrix newton;
+  Reinitializer reinitializer;
+
+  // The solution.
+  double t = 0;
+  Vector x;
+  Predicates p;
+  Vector guards_now;  // guards at (t, x)
+  double next_time_event = std::numeric_limits<double>::infinity();
+  EventRecord last_event;
+  Failure failure{0, "", -1};
+  double last_event_time = -std::numeric_limits<double>::infinity();
+  int events_in_burst = 0;
+
+  // BDF history: modified divided differences of x and of q.
+  std::array<Vector, kHistory> phi_x, phi_q;
+  std::array<double, kHistory> psi{}, alpha{}, beta{}, sigma{}, gamma{};
+  int order = 1, order_used = 0, constant_steps = 0;
+  bool startup_phase = true;
+  int steps_since_restart = 0;
+  double h = 0, h_used = 0, cj = 0, error_coefficient = 0;
+
+  // Newton matrix bookkeeping (modified Newton with reuse).
+  bool have_matrix = false;
+  double cj_of_matrix = 0;
+  long step_of_matrix = 0;
+  double convergence_factor = 20;
+
+  Vector inverse_weight_x, inverse_weight_q, charge_weight;
+  Vector x_predicted, q_predicted, q_derivative_predicted, x_new, q_new, delta, residual;
+  Vector correction_x, correction_q;
+};
+
+Integrator::Impl::Impl(System& system_in, Options options_in)
+    : system(system_in),
+      options(options_in),
+      n(system_in.size()),
+      predicate_count(system_in.predicate_count()),
+      absolute_tolerance(Vector::NullaryExpr(system_in.size(),
+                                             [&](Eigen::Index i) {
+                                               return system_in.absolute_tolerance(
+                                                   static_cast<int>(i), options_in.atol);
+                                             })),
+      newton(system_in, statistics, absolute_tolerance),
+      reinitializer(system_in, newton, statistics, options_in, absolute_tolerance) {
+  options.max_order = std::clamp(options.max_order, 1, kMaxOrder);
+  for (auto& v : phi_x) v.setZero(n);
+  for (auto& v : phi_q) v.setZero(n);
+}
+
+double Integrator::Impl::minimum_step() const {
+  return std::max(options.min_step, 64 * kEps * std::max(std::abs(t), 1e-6 * options.time_scale));
+}
+
+void Integrator::Impl::update_weights() {
+  inverse_weight_x = (options.rtol * x.cwiseAbs() + absolute_tolerance).cwiseInverse();
+  // The error is tested on the dynamic rows' q, in the units of x: a row's tolerance is the
+  // charge its unknowns' tolerances represent (for q_i = x_i, IDA's rtol |x_i| + atol_i).
+  newton.charge_scale(options.rtol * x.cwiseAbs() + absolute_tolerance, charge_weight);
+  inverse_weight_q.resize(n);
+  for (int i = 0; i < n; ++i)
+    inverse_weight_q[i] = charge_weight[i] > 0 ? 1.0 / charge_weight[i] : 0.0;
+}
+
+// IDA's IDASetCoeffs: the coefficients of the variable-step formula for (h, order), and the
+// scaling of the divided differences phi -> phi*.
+void Integrator::Impl::set_coefficients() {
+  if (h != h_used || order != order_used) constant_steps = 0;
+  constant_steps = std::min(constant_steps + 1, order_used + 2);
+  if (order + 1 >= constant_steps) {
+    beta[0] = alpha[0] = sigma[0] = 1;
+    gamma[0] = 0;
+    double span = h;
+    for (int i = 1; i <= order; ++i) {
+      double previous = psi[i - 1];
+      psi[i - 1] = span;
+      beta[i] = beta[i - 1] * psi[i - 1] / previous;
+      span = previous + h;
+      alpha[i] = h / span;
+      sigma[i] = i * sigma[i - 1] * alpha[i];
+      gamma[i] = gamma[i - 1] + alpha[i - 1] / h;
+    }
+    psi[order] = span;
+  }
+  double alpha_s = 0, alpha_0 = 0;
+  for (int i = 0; i < order; ++i) {
+    alpha_s -= 1.0 / (i + 1);
+    alpha_0 -= alpha[i];
+  }
+  cj = -alpha_s / h;
+  error_coefficient = std::max(std::abs(alpha[order] + alpha_s - alpha_0), alpha[order]);
+  for (int i = constant_steps; i <= order; ++i) {
+    phi_x[i] *= beta[i];
+    phi_q[i] *= beta[i];
+  }
+}
+
+void Integrator::Impl::restore() {
+  for (int j = 1; j <= order; ++j) psi[j - 1] = psi[j] - h;
+  for (int j = constant_steps; j <= order; ++j) {
+    phi_x[j] /= beta[j];
+    phi_q[j] /= beta[j];
+  }
+}
+
+void Integrator::Impl::predict() {
+  x_predicted = phi_x[0];
+  q_predicted = phi_q[0];
+  q_derivative_predicted.setZero(n);
+  for (int j = 1; j <= order; ++j) {
+    x_predicted += phi_x[j];
+    q_predicted += phi_q[j];
+    q_derivative_predicted += gamma[j] * phi_q[j];
+  }
+}
+
+// Modified Newton on  qdot_pred + cj (q(x) - q_pred) + f(t, x) = 0, from x_pred.
+Integrator::Impl::Correction Integrator::Impl::correct(double t_new, bool fresh_matrix) {
+  x_new = x_predicted;
+  if (fresh_matrix) {
+    auto outcome = newton.factor(t_new, x_new, p, cj);
+    if (outcome == NewtonMatrix::Outcome::outside_domain) return Correction::outside_domain;
+    if (outcome == NewtonMatrix::Outcome::singular) return Correction::singular;
+    have_matrix = true;
+    cj_of_matrix = cj;
+    step_of_matrix = statistics.steps;
+    convergence_factor = 20;
+  } else if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) {
+    return Correction::outside_domain;
+  }
+
+  const double cj_ratio = cj / cj_of_matrix;
+  const double toldel = 1e-4 * kNewtonTolerance;
+  double first_norm = 0;
+  for (int m = 0;; ++m) {
+    ++statistics.newton_iterations;
+    const Load& load = newton.load();
+    residual = q_derivative_predicted + cj * (load.q - q_predicted) + load.f;
+    for (int i : newton.auxiliary_unknowns()) residual[i] = x_new[i] - x_predicted[i];
+    delta = residual;
+    newton.solve(delta);
+    if (cj_ratio != 1.0) delta *= 2.0 / (1.0 + cj_ratio);  // compensates the stale cj
+    x_new -= delta;
+    double norm = weighted_max_norm(delta, inverse_weight_x);
+    if (!std::isfinite(norm)) return Correction::diverged;
+    bool converged = false;
+    if (m == 0) {
+      first_norm = norm;
+      converged = norm <= 1e-4 * toldel;
+    } else {
+      double rate = std::pow(norm / first_norm, 1.0 / m);
+      if (rate > kMaxConvergenceRate) return Correction::diverged;
+      convergence_factor = rate / (1 - rate);
+    }
+    if (converged || convergence_factor * norm <= kNewtonTolerance) break;
+    if (m + 1 >= kMaxNewtonIterations) return Correction::diverged;
+    if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return Correction::outside_domain;
+  }
+  // q at the converged point: the history must hold q(x_n) exactly for charge conservation.
+  if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return Correction::outside_domain;
+  q_new = newton.load().q;
+  return Correction::converged;
+}
+
+// IDA's IDATestError: local error at order k from the q correction, and the estimates at orders
+// k-1 and k-2 that decide whether to lower the order.
+bool Integrator::Impl::error_test(double& error_k, double& error_k_minus_1, int& order_new) {
+  correction_q = q_new - q_predicted;
+  double norm_k = weighted_max_norm(correction_q, inverse_weight_q);
+  error_k = sigma[order] * norm_k;
+  double terr_k = (order + 1) * error_k;
+  order_new = order;
+  error_k_minus_1 = 0;
+  if (order > 1) {
+    Vector lower = phi_q[order] + correction_q;
+    error_k_minus_1 = sigma[order - 1] * weighted_max_norm(lower, inverse_weight_q);
+    double terr_k_minus_1 = order * error_k_minus_1;
+    if (order > 2) {
+      lower += phi_q[order - 1];
+      double terr_k_minus_2 = (order - 1) * sigma[order - 2] * weighted_max_norm(lower, inverse_weight_q);
+      if (std::max(terr_k_minus_1, terr_k_minus_2) <= terr_k) order_new = order - 1;
+    } else if (terr_k_minus_1 <= 0.5 * terr_k) {
+      order_new = order - 1;
+    }
+  }
+  return error_coefficient * norm_k <= 1.0;
+}
+
+// IDA's IDACompleteStep: order and step for the next step, then the divided differences.
+void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int order_new) {
+  ++statistics.steps;
+  const int order_change = order - order_used;
+  order_used = order;
+  h_used = h;
+  if (order_new == order - 1 || order == options.max_order) startup_phase = false;
+
+  const double h_max = options.max_step > 0 ? options.max_step : std::numeric_limits<double>::infinity();
+  if (startup_phase) {
+    // IDA's start-up: raise the order and double the step until a step fails or the order
+    // drops (the first step's size came from an estimate, so it is kept once).
+    if (++steps_since_restart > 1) {
+      order = std::min(order + 1, options.max_order);
+      h = std::min(2 * h, h_max);
+    }
+  } else {
+    enum { lower, maintain, raise } action = maintain;
+    double error_new = error_k;
+    double error_k_plus_1 = 0;
+    if (order_new == order - 1) {
+      action = lower;
+    } else if (order == options.max_order || order + 1 >= constant_steps || order_change == 1) {
+      action = maintain;
+    } else {
+      Vector above = correction_q - phi_q[order + 1];
+      error_k_plus_1 = weighted_max_norm(above, inverse_weight_q) / (order + 2);
+      double terr_k = (order + 1) * error_k;
+      double terr_k_plus_1 = (order + 2) * error_k_plus_1;
+      if (order == 1) {
+        action = terr_k_plus_1 >= 0.5 * terr_k ? maintain : raise;
+      } else {
+        double terr_k_minus_1 = order * error_k_minus_1;
+        if (terr_k_minus_1 <= std::min(terr_k, terr_k_plus_1)) action = lower;
+        else if (terr_k_plus_1 >= terr_k) action = maintain;
+        else action = raise;
+      }
+    }
+    if (action == raise) ++order, error_new = error_k_plus_1;
+    if (action == lower) --order, error_new = error_k_minus_1;
+    double ratio = std::pow(2 * error_new + 1e-4, -1.0 / (order + 1));
+    if (ratio >= 2) h = std::min(2 * h, h_max);
+    else if (ratio <= 1) h *= std::clamp(ratio, 0.5, 0.9);
+  }
+
+  correction_x = x_new - x_predicted;
+  if (order_used < options.max_order) {
+    phi_x[order_used + 1] = correction_x;
+    phi_q[order_used + 1] = correction_q;
+  }
+  phi_x[order_used] += correction_x;
+  phi_q[order_used] += correction_q;
+  for (int j = order_used - 1; j >= 0; --j) {
+    phi_x[j] += phi_x[j + 1];
+    phi_q[j] += phi_q[j + 1];
+  }
+}
+
+StepOutcome Integrator::Impl::step(double t_stop) {
+  if (!(t_stop > t)) return fail(t, "step() called with t_stop " + format_time(t_stop) + " not after t = " + format_time(t));
+  const double target = std::min(t_stop, next_time_event);
+  const double t_old = t;
+  const Vector guards_old = guards_now;
+
+  update_weights();
+  int error_test_failures = 0, newton_failures = 0;
+  double error_k = 0, error_k_minus_1 = 0;
+  int order_new = order;
+  bool ends_at_target = false;
+  for (;;) {
+    if (options.max_step > 0) h = std::min(h, options.max_step);
+    ends_at_target = t + h >= target || t + 1.0001 * h >= target;
+    if (ends_at_target) h = target - t;
+    if (h < minimum_step() && !ends_at_target) {
+      int worst = -1;
+      weighted_max_norm(correction_q, inverse_weight_q, &worst);
+      return fail(t, "step size " + format_time(h) + " s fell below the minimum (round-off) at t = " + format_time(t), worst);
+    }
+    set_coefficients();
+    predict();
+    const double t_new = ends_at_target ? target : t + h;
+
+    bool fresh = !have_matrix || std::abs(cj / cj_of_matrix - 1) > kJacobianCjChange ||
+                 statistics.steps >= step_of_matrix + kStepsBetweenJacobians;
+    Correction correction = correct(t_new, fresh);
+    if (correction == Correction::diverged && !fresh) correction = correct(t_new, true);
+
+    if (correction != Correction::converged) {
+      restore();
+      if (correction == Correction::outside_domain) ++statistics.rejected_domain;
+      else ++statistics.rejected_newton;
+      if (++newton_failures >= kMaxNewtonFailures || h <= minimum_step()) {
+        int worst = -1;
+        weighted_max_norm(delta, inverse_weight_x, &worst);
+        std::string why = correction == Correction::singular
+                              ? "the Newton matrix is singular (column " + std::to_string(newton.singular_column()) + ")"
+                          : correction == Correction::outside_domain
+                              ? "the model cannot be evaluated (outside its domain) however small the step"
+                              : "Newton's method does not converge however small the step";
+        if (correction == Correction::singular) worst = newton.singular_column();
+        return fail(t, why + " at t = " + format_time(t), worst);
+      }
+      h *= 0.25;
+      have_matrix = have_matrix && correction != Correction::singular;
+      continue;
+    }
+
+    if (!error_test(error_k, error_k_minus_1, order_new)) {
+      restore();
+      ++statistics.rejected_error_test;
+      ++error_test_failures;
+      if (error_test_failures >= kMaxErrorTestFailures) {
+        int worst = -1;
+        weighted_max_norm(correction_q, inverse_weight_q, &worst);
+        return fail(t, "the error test failed repeatedly at t = " + format_time(t), worst);
+      }
+      double error_new = order_new == order ? error_k : error_k_minus_1;
+      order = order_new;
+      if (error_test_failures == 1) {
+        double ratio = 0.9 * std::pow(2 * error_new + 1e-4, -1.0 / (order + 1));
+        h *= std::clamp(ratio, 0.25, 0.9);
+      } else {
+        if (error_test_failures > 2) order = 1;
+        h *= 0.25;
+      }
+      startup_phase = false;
+      continue;
+    }
+    complete_step(error_k, error_k_minus_1, order_new);
+    t = t_new;
+    x = x_new;
+    break;
+  }
+
+  if (predicate_count > 0) {
+    Vector guards_new(predicate_count);
+    if (!evaluate_guards(t, x, guards_new)) return fail(t, "a guard function cannot be evaluated at t = " + format_time(t));
+    bool crossed = false;
+    for (int k = 0; k < predicate_count; ++k) crossed |= (guards_new[k] > 0) != (p[k] != 0);
+    if (crossed) {
+      guards_now = guards_new;
+      return handle_state_event(t_old, guards_old);
+    }
+    guards_now = guards_new;
+  }
+
+  if (ends_at_target && target == next_time_event) {
+    ++statistics.time_events;
+    // The solution is continuous at a source corner, its derivatives are not: restart at
+    // order 1 from the same state.
+    auto consistent = reinitializer.derivative_only(t, x, p, h_used);
+    if (!consistent) return fail(t, reinitializer.failure_reason() + " at t = " + format_time(t), reinitializer.failure_unknown());
+    restart(t, *consistent);
+    return {t == t_stop ? StepKind::stop : StepKind::time_event, t};
+  }
+  if (ends_at_target) return {StepKind::stop, t};
+  return {StepKind::accepted, t};
+}
+
+bool Integrator::Impl::evaluate_guards(double t_at, const Vector& x_at, Vector& out) const {
+  out.setZero(predicate_count);
+  return system.guards(t_at, x_at, out) == EvalStatus::ok;
+}
+
+StepOutcome Integrator::Impl::handle_state_event(double t_old, const Vector& guards_old) {
+  // Locate the earliest crossing on the step's interpolating polynomial.
+  auto guards_at = [&](double t_at, Vector& out) { return evaluate_guards(t_at, interpolate(t_at), out); };
+  const double tolerance = 100 * kEps * (std::abs(t) + std::abs(h_used));
+  Crossing crossing = locate_first_crossing(guards_at, p, t_old, guards_old, t, guards_now, tolerance);
+  if (!crossing.ok) return fail(t, "a guard function cannot be evaluated while locating an event near t = " + format_time(t));
+
+  const double t_event = crossing.t_right;
+  const Vector x_before = interpolate(t_event);
+  Predicates target = p;
+  for (int k = 0; k < predicate_count; ++k) target[k] = crossing.guards_right[k] > 0;
+
+  // Accumulation: events that follow each other closer than the time resolution.
+  if (t_event - last_event_time <= 100 * minimum_step()) ++events_in_burst;
+  else events_in_burst = 0;
+  last_event_time = t_event;
+  if (events_in_burst >= options.max_events_in_burst) {
+    std::string which;
+    for (int k = 0; k < predicate_count; ++k)
+      if (target[k] != p[k]) which += (which.empty() ? "" : ", ") + std::to_string(k);
+    return fail(t_event, "event accumulation at t = " + format_time(t_event) + ": " +
+                             std::to_string(events_in_burst) + " events within the time resolution (predicates " + which + ")");
+  }
+
+  t = t_event;
+  if (!settle(t_event, x_before, target, true)) return {StepKind::failed, t};
+  return {StepKind::event, t};
+}
+
+// The event procedure: jumps (form (5), e from convention (9)), consistent re-initialization
+// and the predicate fixed point.
+bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicates& target_in,
+                              bool record_flips) {
+  ++statistics.events;
+  last_event = EventRecord{};
+  last_event.t = t_at;
+  last_event.x_before = x_start;
+  Vector x_jumped = x_start;
+  Predicates target = target_in;
+  std::vector<char> flipped_here(static_cast<std::size_t>(predicate_count), 0);
+  std::vector<JumpEntry> jump_entries;
+  std::optional<ConsistentState> consistent;
+  const double h_reference = h > 0 ? h : 1e-3 * options.time_scale;
+
+  for (int iteration = 1;; ++iteration) {
+    if (iteration > options.max_event_iterations) {
+      std::string which;
+      for (int k = 0; k < predicate_count; ++k)
+        if (flipped_here[k]) which += (which.empty() ? "" : ", ") + std::to_string(k);
+      failure = Failure{t_at, "event accumulation (chattering) at t = " + format_time(t_at) +
+                                  ": predicates " + which + " do not settle after " +
+                                  std::to_string(options.max_event_iterations) + " flips",
+                        -1};
+      return false;
+    }
+    last_event.iterations = iteration;
+    if (system.has_jumps() && target != p) {
+      jump_entries.clear();
+      system.jump_matrix(t_at, x_jumped, p, jump_entries);
+      for (const JumpEntry& entry : jump_entries)
+        if (target[entry.predicate] != p[entry.predicate])
+          x_jumped[entry.row] += entry.value * (target[entry.predicate] ? 1.0 : -1.0);
+      if (!jump_entries.empty()) last_event.jumped = true;
+    }
+    for (int k = 0; k < predicate_count; ++k) {
+      if (target[k] == p[k]) continue;
+      flipped_here[k] = 1;
+      if (record_flips) last_event.flips.push_back({k, p[k] != 0, target[k] != 0});
+    }
+    Predicates previous = p;
+    p = target;
+    consistent = reinitializer.jump(t_at, x_jumped, previous, p, h_reference);
+    if (!consistent) {
+      failure = Failure{t_at, reinitializer.failure_reason() + " at t = " + format_time(t_at),
+                        reinitializer.failure_unknown()};
+      return false;
+    }
+    // Convention (9) for the new mode: a predicate that flipped here is judged where the new
+    // motion is heading (just after t); the others on the state right after the jump.
+    Vector guards_after(predicate_count), guards_heading(predicate_count);
+    if (!evaluate_guards(t_at, consistent->x, guards_after) ||
+        !evaluate_guards(consistent->t_heading, consistent->x_heading, guards_heading)) {
+      failure = Failure{t_at, "a guard function cannot be evaluated after the event at t = " + format_time(t_at), -1};
+      return false;
+    }
+    Predicates next = p;
+    for (int k = 0; k < predicate_count; ++k)
+      next[k] = (flipped_here[k] ? guards_heading[k] : guards_after[k]) > 0;
+    guards_now = guards_after;
+    if (next == p) break;
+    target = next;
+  }
+  last_event.x_after = consistent->x;
+  last_event.impulse = consistent->impulse;
+  if (consistent->impulse.size() > 0 && consistent->impulse.cwiseAbs().maxCoeff() > 0) last_event.jumped = true;
+  if (last_event.jumped) ++statistics.jumps;
+  restart(t_at, *consistent);
+  return true;
+}
+
+// IDA's IDAGetSolution: the interpolating polynomial of the last step.
+Vector Integrator::Impl::interpolate(double t_at) const {
+  Vector result = phi_x[0];
+  double delta_t = t_at - t;
+  double c = 1, gam = delta_t / psi[0];
+  for (int j = 1; j <= order_used; ++j) {
+    c *= gam;
+    gam = (delta_t + psi[j - 1]) / psi[j];
+    result += c * phi_x[j];
+  }
+  return result;
+}
+
+// Order 1 from a consistent state, as after the initial point (IDA's first step).
+void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
+  t = t_at;
+  x = consistent.x;
+  next_time_event = system.next_time_event(t);
+  if (predicate_count > 0) evaluate_guards(t, x, guards_now);
+  update_weights();
+  double h_new = h > 0 ? h : (options.initial_step > 0 ? options.initial_step : 1e-3 * options.time_scale);
+  if (h <= 0 && options.initial_step <= 0) {
+    // IDA's initial step: the first-order change over the step is at most half a tolerance.
+    double rate = weighted_max_norm(consistent.q_derivative, inverse_weight_q);
+    if (h_new * rate > 0.5) h_new = 0.5 / rate;
+  }
+  if (options.max_step > 0) h_new = std::min(h_new, options.max_step);
+  h_new = std::max(h_new, minimum_step());
+  h = h_new;
+  for (auto& v : phi_x) v.setZero();
+  for (auto& v : phi_q) v.setZero();
+  phi_x[0] = consistent.x;
+  phi_q[0] = consistent.q;
+  phi_x[1] = h * consistent.x_derivative;
+  phi_q[1] = h * consistent.q_derivative;
+  order = 1;
+  order_used = 0;
+  h_used = 0;
+  psi[0] = h;
+  cj = 1 / h;
+  constant_steps = 0;
+  startup_phase = true;
+  steps_since_restart = 0;
+}
+
+// --- Integrator ------------------------------------------------------------------------------
+
+Integrator::Integrator(System& system, Options options)
+    : impl_(std::make_unique<Impl>(system, options)) {}
+Integrator::~Integrator() = default;
+
+bool Integrator::initialize(double t0, const Vector& x0) {
+  Predicates p0(static_cast<std::size_t>(impl_->predicate_count), 0);
+  if (impl_->predicate_count > 0) {
+    Vector guards(impl_->predicate_count);
+    if (!impl_->evaluate_guards(t0, x0, guards)) {
+      impl_->failure = Failure{t0, "a guard function cannot be evaluated at the initial state", -1};
+      return false;
+    }
+    for (int k = 0; k < impl_->predicate_count; ++k) p0[k] = guards[k] > 0;
+  }
+  return initialize(t0, x0, p0);
+}
+
+bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
+  Impl& s = *impl_;
+  if (x0.size() != s.n || static_cast<int>(p0.size()) != s.predicate_count) {
+    s.failure = Failure{t0, "initial state has the wrong size", -1};
+    return false;
+  }
+  s.t = t0;
+  s.x = x0;
+  s.p = p0;
+  s.h = 0;
+  s.statistics.events = 0;
+  // The initial point is made consistent like an event with no flips (flips the fixed point
+  // finds are real flips at t0).
+  if (!s.settle(t0, x0, p0, true)) return false;
+  s.statistics.events = 0;
+  s.statistics.jumps = 0;
+  s.last_event = EventRecord{};
+  return true;
+}
+
+StepOutcome Integrator::step(double t_stop) { return impl_->step(t_stop); }
+double Integrator::time() const { return impl_->t; }
+const Vector& Integrator::state() const { return impl_->x; }
+const Predicates& Integrator::predicates() const { return impl_->p; }
+int Integrator::order() const { return impl_->order_used; }
+double Integrator::step_size() const { return impl_->h_used; }
+const EventRecord& Integrator::last_event() const { return impl_->last_event; }
+const Failure& Integrator::failure() const { return impl_->failure; }
+const Statistics& Integrator::statistics() const { return impl_->statistics; }
+
+Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
+
+}  // namespace padae

@@ -1,0 +1,182 @@
+#include "padae/newton_matrix.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace padae {
+
+namespace {
+
+void size_load(Load& load, int n, int nonzeros) {
+  load.f.setZero(n);
+  load.q.setZero(n);
+  load.df_dx.assign(static_cast<std::size_t>(nonzeros), 0.0);
+  load.dq_dx.assign(static_cast<std::size_t>(nonzeros), 0.0);
+}
+
+// Greedy distance-2 colouring: columns that share no row can be perturbed together.
+std::vector<std::vector<int>> orthogonal_column_groups(const Pattern& pattern) {
+  const int n = pattern.size();
+  const auto& starts = pattern.column_starts();
+  const auto& rows = pattern.row_indices();
+  std::vector<std::vector<int>> columns_of_row(static_cast<std::size_t>(n));
+  for (int column = 0; column < n; ++column)
+    for (int k = starts[column]; k < starts[column + 1]; ++k) columns_of_row[rows[k]].push_back(column);
+
+  std::vector<int> group_of(static_cast<std::size_t>(n), -1);
+  std::vector<int> forbidden_by(static_cast<std::size_t>(n), -1);  // group -> last column that forbade it
+  std::vector<std::vector<int>> groups;
+  for (int column = 0; column < n; ++column) {
+    for (int k = starts[column]; k < starts[column + 1]; ++k)
+      for (int other : columns_of_row[rows[k]])
+        if (group_of[other] >= 0) forbidden_by[group_of[other]] = column;
+    int group = 0;
+    while (group < static_cast<int>(groups.size()) && forbidden_by[group] == column) ++group;
+    if (group == static_cast<int>(groups.size())) groups.emplace_back();
+    groups[group].push_back(column);
+    group_of[column] = group;
+  }
+  return groups;
+}
+
+}  // namespace
+
+NewtonMatrix::NewtonMatrix(System& system, Statistics& statistics, const Vector& typical)
+    : system_(system),
+      statistics_(statistics),
+      pattern_(system.pattern()),
+      lu_(pattern_),
+      typical_(typical) {
+  const int n = system.size();
+  size_load(load_, n, pattern_.nonzeros());
+  matrix_.resize(static_cast<std::size_t>(pattern_.nonzeros()));
+  abs_dq_dx_.assign(matrix_.size(), 0.0);
+  auxiliary_.resize(static_cast<std::size_t>(n));
+  diagonal_.resize(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    auxiliary_[i] = system.kind(i) == UnknownKind::auxiliary;
+    if (auxiliary_[i]) auxiliary_list_.push_back(i);
+    diagonal_[i] = pattern_.index(i, i);
+  }
+  if (!system.analytic_jacobian()) column_groups_ = orthogonal_column_groups(pattern_);
+}
+
+EvalStatus NewtonMatrix::evaluate(double t, const Vector& x, const Predicates& p) {
+  load_.f.setZero();
+  load_.q.setZero();
+  load_.jacobian_requested = false;
+  ++statistics_.residual_evaluations;
+  return system_.load(t, x, p, load_);
+}
+
+EvalStatus NewtonMatrix::load_with_derivatives(double t, const Vector& x, const Predicates& p,
+                                               Load& out) {
+  const int n = system_.size();
+  if (out.f.size() != n) size_load(out, n, pattern_.nonzeros());
+  out.f.setZero();
+  out.q.setZero();
+  std::fill(out.df_dx.begin(), out.df_dx.end(), 0.0);
+  std::fill(out.dq_dx.begin(), out.dq_dx.end(), 0.0);
+  ++statistics_.jacobians;
+  if (!system_.analytic_jacobian()) return finite_difference_derivatives(t, x, p, out);
+  out.jacobian_requested = true;
+  ++statistics_.residual_evaluations;
+  return system_.load(t, x, p, out);
+}
+
+EvalStatus NewtonMatrix::finite_difference_derivatives(double t, const Vector& x,
+                                                       const Predicates& p, Load& out) {
+  out.jacobian_requested = false;
+  ++statistics_.residual_evaluations;
+  if (system_.load(t, x, p, out) != EvalStatus::ok) return EvalStatus::outside_domain;
+  const int n = system_.size();
+  if (perturbed_.f.size() != n) size_load(perturbed_, n, 0);
+  const auto& starts = pattern_.column_starts();
+  const auto& rows = pattern_.row_indices();
+  const double root_eps = std::sqrt(std::numeric_limits<double>::epsilon());
+  Vector shifted = x;
+  Vector increment(n);
+  for (const auto& group : column_groups_) {
+    for (int column : group) {
+      double magnitude = std::max(std::abs(x[column]), typical_[column]);
+      // Round the increment so that x + increment - x is exactly representable.
+      volatile double stepped = x[column] + root_eps * magnitude;
+      increment[column] = stepped - x[column];
+      shifted[column] = stepped;
+    }
+    perturbed_.f.setZero();
+    perturbed_.q.setZero();
+    perturbed_.jacobian_requested = false;
+    ++statistics_.residual_evaluations;
+    if (system_.load(t, shifted, p, perturbed_) != EvalStatus::ok) return EvalStatus::outside_domain;
+    for (int column : group) {
+      for (int k = starts[column]; k < starts[column + 1]; ++k) {
+        int row = rows[k];
+        out.df_dx[k] = (perturbed_.f[row] - out.f[row]) / increment[column];
+        out.dq_dx[k] = (perturbed_.q[row] - out.q[row]) / increment[column];
+      }
+      shifted[column] = x[column];
+    }
+  }
+  return EvalStatus::ok;
+}
+
+NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Predicates& p,
+                                           double cj) {
+  if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
+  for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
+  return factor_loaded();
+}
+
+NewtonMatrix::Outcome NewtonMatrix::factor_shifted(double t, const Vector& x, const Predicates& p,
+                                                   double shift) {
+  if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
+  matrix_ = load_.df_dx;
+  for (int i = 0; i < pattern_.size(); ++i) matrix_[diagonal_[i]] += shift;
+  return factor_loaded();
+}
+
+NewtonMatrix::Outcome NewtonMatrix::factor_blend(double t, const Vector& x,
+                                                 const Predicates& p_from,
+                                                 const Predicates& p_to, double lambda,
+                                                 double cj) {
+  if (load_with_derivatives(t, x, p_from, blend_) != EvalStatus::ok ||
+      load_with_derivatives(t, x, p_to, load_) != EvalStatus::ok)
+    return Outcome::outside_domain;
+  const double keep = 1 - lambda;
+  load_.f = keep * blend_.f + lambda * load_.f;
+  load_.q = keep * blend_.q + lambda * load_.q;
+  for (std::size_t k = 0; k < matrix_.size(); ++k) {
+    load_.df_dx[k] = keep * blend_.df_dx[k] + lambda * load_.df_dx[k];
+    load_.dq_dx[k] = keep * blend_.dq_dx[k] + lambda * load_.dq_dx[k];
+    matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
+  }
+  return factor_loaded();
+}
+
+NewtonMatrix::Outcome NewtonMatrix::factor_loaded() {
+  for (std::size_t k = 0; k < matrix_.size(); ++k) abs_dq_dx_[k] = std::abs(load_.dq_dx[k]);
+  // Auxiliary unknowns are held: their rows become x_i = held value.
+  if (!auxiliary_list_.empty()) {
+    const auto& starts = pattern_.column_starts();
+    const auto& rows = pattern_.row_indices();
+    for (int column = 0; column < pattern_.size(); ++column)
+      for (int k = starts[column]; k < starts[column + 1]; ++k)
+        if (auxiliary_[rows[k]]) matrix_[k] = 0.0;
+    for (int i : auxiliary_list_) matrix_[diagonal_[i]] = 1.0;
+  }
+  ++statistics_.lu_factorizations;
+  return lu_.factor(matrix_) ? Outcome::ok : Outcome::singular;
+}
+
+void NewtonMatrix::charge_scale(const Vector& scale, Vector& out) const {
+  const auto& starts = pattern_.column_starts();
+  const auto& rows = pattern_.row_indices();
+  out.setZero(pattern_.size());
+  for (int column = 0; column < pattern_.size(); ++column)
+    for (int k = starts[column]; k < starts[column + 1]; ++k)
+      out[rows[k]] += abs_dq_dx_[k] * scale[column];
+}
+
+}  // namespace padae

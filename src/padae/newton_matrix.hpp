@@ -1,0 +1,63 @@
+// The model side of a Newton iteration: loads f and q at a point, forms the iteration matrix
+// df/dx + cj dq/dx on the system's pattern (analytic or by finite differences) and factors it.
+// Shared by the BDF corrector, the jump re-initialization and the steady-state solver.
+#pragma once
+
+#include <vector>
+
+#include "padae/integrator.hpp"
+#include "padae/sparse_lu.hpp"
+
+namespace padae {
+
+class NewtonMatrix {
+ public:
+  // typical: a magnitude per unknown below which it counts as small (the absolute tolerances);
+  // it sizes the finite-difference increments.
+  NewtonMatrix(System& system, Statistics& statistics, const Vector& typical);
+
+  // f and q at (t, x, p) into load(); no derivatives.
+  EvalStatus evaluate(double t, const Vector& x, const Predicates& p);
+  // f, q and their derivatives at (t, x, p); then factors df/dx + cj dq/dx (rows of auxiliary
+  // unknowns replaced by identity rows). False with a reason when the model fails or the matrix
+  // is singular.
+  enum class Outcome { ok, outside_domain, singular };
+  Outcome factor(double t, const Vector& x, const Predicates& p, double cj);
+  // df/dx + shift I: pseudo-transient continuation toward a steady state.
+  Outcome factor_shifted(double t, const Vector& x, const Predicates& p, double shift);
+  // As factor(), for the blend (1 - lambda) * system(p_from) + lambda * system(p_to) used by the
+  // continuation in re-initialization. Leaves load() holding the blended f and q.
+  Outcome factor_blend(double t, const Vector& x, const Predicates& p_from, const Predicates& p_to,
+                       double lambda, double cj);
+
+  void solve(Vector& b) const { lu_.solve(b); }
+  const Load& load() const { return load_; }
+  // |dq/dx| summed into row weights: sum_j |dq_ij/dx_j| * scale_j (zero for algebraic rows).
+  void charge_scale(const Vector& scale, Vector& out) const;
+  int singular_column() const { return lu_.singular_column(); }
+  bool is_auxiliary(int unknown) const { return auxiliary_[unknown]; }
+  const std::vector<int>& auxiliary_unknowns() const { return auxiliary_list_; }
+
+ private:
+  EvalStatus load_with_derivatives(double t, const Vector& x, const Predicates& p, Load& out);
+  EvalStatus finite_difference_derivatives(double t, const Vector& x, const Predicates& p,
+                                           Load& out);
+  Outcome factor_loaded();
+
+  System& system_;
+  Statistics& statistics_;
+  const Pattern& pattern_;
+  SparseLu lu_;
+  Load load_;
+  Load blend_;            // second load for the continuation blend
+  Load perturbed_;        // scratch for finite differences
+  std::vector<double> matrix_;
+  std::vector<double> abs_dq_dx_;  // |dq/dx| at the last derivative evaluation
+  std::vector<char> auxiliary_;
+  std::vector<int> auxiliary_list_;
+  std::vector<int> diagonal_;      // value index of (i, i)
+  std::vector<std::vector<int>> column_groups_;  // structurally orthogonal columns, for FD
+  Vector typical_;
+};
+
+}  // namespace padae

@@ -1,0 +1,71 @@
+// Consistent re-initialization after an event, and the jump of the state it implies.
+//
+// For the charge form d/dt q(x) + f(t, x) = 0 a mode change can leave the old charges
+// inconsistent with the new algebraic constraints (an ideal switch joining capacitors at
+// different voltages; an open switch breaking an inductor's current). The physical state after
+// the event is the limit, as h -> 0, of a backward-Euler step of length h from the old charges:
+//     q(x+) - q(x-) + h f(t, x+) = 0     (dynamic rows)        f(t, x+) = 0   (algebraic rows)
+// Its impulsive unknowns carry the charge (or flux) that moved, so charge is conserved on every
+// cut-set and flux on every loop, whatever the topology. padae takes the step with h a few
+// ulps of t: below the time resolution, so the state it reaches is the state at t + 0.
+// A second backward-Euler step, short but well above round-off, gives the right derivatives
+// (the BDF restarts at order 1 from them) and where the new motion is heading (convention (9)).
+// When Newton fails on the new mode, the paper's continuation in a parameter blends the
+// residuals of the old and the new mode.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "padae/integrator.hpp"
+#include "padae/newton_matrix.hpp"
+
+namespace padae {
+
+struct ConsistentState {
+  Vector x;             // consistent state at t + 0
+  Vector q;             // q(x)
+  Vector x_derivative;  // right derivatives at t (zero for algebraic unknowns)
+  Vector q_derivative;
+  Vector impulse;       // integral of each unknown over the jump (empty without a jump)
+  double t_heading = 0; // a point just after t on the new motion
+  Vector x_heading;
+};
+
+class Reinitializer {
+ public:
+  Reinitializer(System& system, NewtonMatrix& newton, Statistics& statistics,
+                const Options& options, const Vector& absolute_tolerance);
+
+  // The state after the predicates changed from p_from to p_to at t; x_start already holds
+  // the explicit jumps X e. h_reference: a step size typical of the solution near t.
+  std::optional<ConsistentState> jump(double t, const Vector& x_start, const Predicates& p_from,
+                                      const Predicates& p_to, double h_reference);
+  // Only the right derivatives, for a state that is already consistent (a time event).
+  std::optional<ConsistentState> derivative_only(double t, const Vector& x, const Predicates& p,
+                                                 double h_reference);
+
+  const std::string& failure_reason() const { return failure_reason_; }
+  int failure_unknown() const { return failure_unknown_; }
+
+ private:
+  // Backward Euler of length h from charges q_start, for the blend of modes
+  // (1 - lambda) p_from + lambda p_to, evaluated at t_eval; x holds the guess and the result.
+  bool backward_euler(double t_eval, double h, const Vector& q_start, const Vector& held,
+                      const Predicates& p_from, const Predicates& p_to, double lambda, Vector& x);
+  bool backward_euler_with_continuation(double t_eval, double h, const Vector& q_start,
+                                        const Predicates& p_from, const Predicates& p_to,
+                                        Vector& x);
+  std::optional<ConsistentState> derivatives(double t, const Vector& x_plus, const Predicates& p,
+                                             double h_reference);
+
+  System& system_;
+  NewtonMatrix& newton_;
+  Statistics& statistics_;
+  const Options& options_;
+  const Vector& absolute_tolerance_;
+  std::string failure_reason_;
+  int failure_unknown_ = -1;
+};
+
+}  // namespace padae

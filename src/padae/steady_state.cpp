@@ -1,0 +1,147 @@
+#include "padae/steady_state.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "padae/newton_matrix.hpp"
+
+namespace padae {
+
+namespace {
+
+constexpr int kMaxNewtonIterations = 60;
+constexpr double kConvergedNorm = 1e-3;  // Newton correction, in tolerance units
+
+class SteadyStateSolver {
+ public:
+  SteadyStateSolver(System& system, double t, const Options& options)
+      : system_(system),
+        t_(t),
+        options_(options),
+        absolute_tolerance_(Vector::NullaryExpr(system.size(), [&](Eigen::Index i) {
+          return system.absolute_tolerance(static_cast<int>(i), options.atol);
+        })),
+        newton_(system, statistics_, absolute_tolerance_) {}
+
+  // Newton on f(t, x, p) = 0 (shift = 0), or on (x - x_previous) shift + f = 0.
+  bool newton(Vector& x, const Vector& x_previous, const Predicates& p, double shift) {
+    const Vector held = x;
+    for (int iteration = 0; iteration < kMaxNewtonIterations; ++iteration) {
+      if (newton_.factor_shifted(t_, x, p, shift) != NewtonMatrix::Outcome::ok) {
+        worst_ = newton_.singular_column();
+        return false;
+      }
+      Vector delta = newton_.load().f + shift * (x - x_previous);
+      for (int i : newton_.auxiliary_unknowns()) delta[i] = x[i] - held[i];
+      newton_.solve(delta);
+      x -= delta;
+      double norm = 0;
+      for (Eigen::Index i = 0; i < x.size(); ++i) {
+        double scaled = std::abs(delta[i]) / (options_.rtol * std::abs(x[i]) + absolute_tolerance_[i]);
+        if (!(scaled <= norm)) norm = scaled, worst_ = static_cast<int>(i);
+      }
+      if (!std::isfinite(norm)) return false;
+      if (norm <= kConvergedNorm) return true;
+    }
+    return false;
+  }
+
+  // Pseudo-transient continuation: implicit steps of a fictitious relaxation, longer and
+  // longer, until the steady equations themselves converge.
+  bool pseudo_transient(Vector& x, const Predicates& p) {
+    double shift = 1e6;
+    for (int attempt = 0; attempt < 200; ++attempt) {
+      Vector trial = x;
+      if (newton(trial, x, p, shift)) {
+        x = trial;
+        Vector final_attempt = x;
+        if (newton(final_attempt, x, p, 0.0)) {
+          x = final_attempt;
+          return true;
+        }
+        shift *= 0.1;
+      } else {
+        shift *= 10;
+        if (shift > 1e30) return false;
+      }
+    }
+    return false;
+  }
+
+  bool guards(const Vector& x, Predicates& p) {
+    Vector values(system_.predicate_count());
+    values.setZero();
+    if (system_.guards(t_, x, values) != EvalStatus::ok) return false;
+    for (int k = 0; k < system_.predicate_count(); ++k) p[k] = values[k] > 0;
+    return true;
+  }
+
+  void jump(Vector& x, const Predicates& from, const Predicates& to) {
+    if (!system_.has_jumps()) return;
+    std::vector<JumpEntry> entries;
+    system_.jump_matrix(t_, x, from, entries);
+    for (const JumpEntry& entry : entries)
+      if (from[entry.predicate] != to[entry.predicate])
+        x[entry.row] += entry.value * (to[entry.predicate] ? 1.0 : -1.0);
+  }
+
+  int worst() const { return worst_; }
+
+ private:
+  System& system_;
+  double t_;
+  const Options& options_;
+  Statistics statistics_;
+  Vector absolute_tolerance_;
+  NewtonMatrix newton_;
+  int worst_ = -1;
+};
+
+}  // namespace
+
+SteadyState steady_state(System& system, double t, const Vector& x_guess, const Predicates& p0,
+                         const Options& options) {
+  SteadyState result;
+  SteadyStateSolver solver(system, t, options);
+  result.x = x_guess;
+  result.p = p0;
+  if (result.p.empty() && system.predicate_count() > 0) {
+    result.p.assign(static_cast<std::size_t>(system.predicate_count()), 0);
+    if (!solver.guards(result.x, result.p)) {
+      result.message = "a guard function cannot be evaluated at the initial guess";
+      return result;
+    }
+  }
+  // Iterate the modes to a fixed point: solve with p, re-evaluate the predicates, repeat.
+  for (int iteration = 0; iteration < options.max_event_iterations; ++iteration) {
+    Vector x = result.x;
+    if (!solver.newton(x, x, result.p, 0.0)) {
+      x = result.x;
+      if (!solver.pseudo_transient(x, result.p)) {
+        result.message = "no steady state: Newton's method and pseudo-transient continuation fail";
+        result.worst_unknown = solver.worst();
+        return result;
+      }
+    }
+    result.x = x;
+    if (system.predicate_count() == 0) {
+      result.converged = true;
+      return result;
+    }
+    Predicates next = result.p;
+    if (!solver.guards(result.x, next)) {
+      result.message = "a guard function cannot be evaluated at the steady state";
+      return result;
+    }
+    if (next == result.p) {
+      result.converged = true;
+      return result;
+    }
+    solver.jump(result.x, result.p, next);
+    result.p = next;
+  }
+  result.message = "the predicates do not settle at a steady state (they keep flipping)";
+  return result;
+}
+
+}  // namespace padae

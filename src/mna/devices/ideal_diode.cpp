@@ -1,8 +1,9 @@
 // Ideal diode (.model D with IDEAL=1): a predicate with its on/off mode held in an auxiliary
 // unknown. Off -> on when the voltage exceeds VFWD, on -> off when the current falls below 0:
 //     guard = mode ? i : (va - vk - VFWD)
-// Branch current i from anode to cathode; row: on: (va - vk - VFWD) - RON i = 0; off: i = 0
-// (ROFF infinite, the default) or (va - vk) - ROFF i = 0.
+// Branch current i from anode to cathode; row: on: (va - vk - VFWD) / RON - i = 0, or
+// va - vk - VFWD = 0 for RON = 0 (the default); off: i = 0 for ROFF infinite (the default), or
+// (va - vk) / ROFF - i = 0.
 #include <cmath>
 
 #include "mna/device.hpp"
@@ -33,12 +34,8 @@ class IdealDiode final : public Device {
     const bool on = e.p[first_predicate()];
     const double v = e.value(a_) - e.value(k_), i = e.value(branch_);
     e.f(a_, i), e.f(k_, -i);
-    double alpha = 1, beta = on_resistance_, offset = forward_voltage_;
-    if (!on) {
-      offset = 0;
-      if (std::isinf(off_resistance_)) alpha = 0, beta = 1;
-      else beta = off_resistance_;
-    }
+    const double r = on ? on_resistance_ : off_resistance_, offset = on ? forward_voltage_ : 0;
+    const double alpha = r == 0 ? 1 : 1 / r, beta = r == 0 ? 0 : 1;
     e.f(branch_, alpha * (v - offset) - beta * i);
     if (!e.jacobian()) return;
     e.df(slot_a_branch_, 1), e.df(slot_k_branch_, -1);

@@ -3,7 +3,8 @@
 // (a mode that only events change); one predicate says "on" with a guard on the control:
 //     guard = state ? c - (VT - VH) : c - (VT + VH)
 // RON = 0 or ROFF = infinite make the switch ideal; then it carries a branch current i and its
-// row reads alpha(p) (va - vb) - beta(p) i = 0 with (alpha, beta) = (1, R) or (0, 1) for R = inf.
+// row reads alpha(p) (va - vb) - beta(p) i = 0 with (alpha, beta) = (1/R, 1), or (1, 0) for
+// R = 0, or (0, 1) for R = inf (conductance scaling keeps a large finite R well conditioned).
 #include <cmath>
 
 #include "mna/device.hpp"
@@ -56,7 +57,7 @@ class Switch final : public Device {
       return;
     }
     const double r = on ? on_resistance_ : off_resistance_;
-    const double alpha = std::isinf(r) ? 0 : 1, beta = std::isinf(r) ? 1 : r;
+    const double alpha = r == 0 ? 1 : 1 / r, beta = r == 0 ? 0 : 1;
     const double i = e.value(branch_);
     e.f(a_, i), e.f(b_, -i);
     e.f(branch_, alpha * v - beta * i);

@@ -1,0 +1,124 @@
+// B-source expressions: predicates extracted from conditions and kinks, values for fixed
+// predicates, exact gradients.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "helpers.hpp"
+#include "mna/behavioral_expression.hpp"
+
+namespace mna::test {
+namespace {
+
+using netlist::BinaryOperator;
+
+struct Fixture {
+  Unknowns unknowns;
+  int a, b;
+  Fixture() { a = unknowns.node("a"), b = unknowns.node("b"); }
+};
+
+TEST(BehavioralExpression, ComparatorTernaryIsOnePredicate) {
+  Fixture fx;
+  // v(a) > v(b) ? 5 : -5
+  BehavioralExpression e(*conditional(binary(BinaryOperator::greater, voltage("a"), voltage("b")), number(5), number(-5)),
+                         fx.unknowns, "b1");
+  ASSERT_EQ(e.predicate_count(), 1);
+  EXPECT_EQ(e.predicate_label(0), "v(a)>v(b)");
+  Vector x(2);
+  x << 1.0, 1.5;
+  double guard;
+  e.guards(0, x, &guard);
+  EXPECT_DOUBLE_EQ(guard, -0.5);
+  const std::uint8_t on = 1, off = 0;
+  double gradient[2];
+  EXPECT_DOUBLE_EQ(e.evaluate(0, x, &on, gradient), 5);  // the predicate, not the state, decides
+  EXPECT_DOUBLE_EQ(e.evaluate(0, x, &off, gradient), -5);
+  EXPECT_DOUBLE_EQ(gradient[0], 0);
+}
+
+TEST(BehavioralExpression, LessThanGuardIsRightMinusLeft) {
+  Fixture fx;
+  BehavioralExpression e(*binary(BinaryOperator::less, voltage("a"), number(2)), fx.unknowns, "b1");
+  Vector x(2);
+  x << 0.5, 0;
+  double guard;
+  e.guards(0, x, &guard);
+  EXPECT_DOUBLE_EQ(guard, 1.5);
+}
+
+TEST(BehavioralExpression, KinksBecomePredicates) {
+  Fixture fx;
+  // abs(v(a)) + min(v(a), v(b)) + limit(v(b), 0, 1) + u(time - 1)
+  auto sum = binary(BinaryOperator::add, call("abs", {voltage("a")}), call("min", {voltage("a"), voltage("b")}));
+  sum = binary(BinaryOperator::add, sum, call("limit", {voltage("b"), number(0), number(1)}));
+  sum = binary(BinaryOperator::add, sum, call("u", {binary(BinaryOperator::subtract, time(), number(1))}));
+  BehavioralExpression e(*sum, fx.unknowns, "b1");
+  ASSERT_EQ(e.predicate_count(), 1 + 1 + 2 + 1);
+  Vector x(2);
+  x << -2.0, 3.0;
+  double guards[5];
+  e.guards(2.0, x, guards);
+  padae::Predicates p(5);
+  for (int k = 0; k < 5; ++k) p[k] = guards[k] > 0;
+  double gradient[2];
+  // |-2| + min(-2, 3) + limit(3, 0, 1) + u(1) = 2 - 2 + 1 + 1
+  EXPECT_DOUBLE_EQ(e.evaluate(2.0, x, p.data(), gradient), 2.0);
+  EXPECT_DOUBLE_EQ(gradient[0], -1 + 1);  // d|a|/da = -1, d min/da = 1
+  EXPECT_DOUBLE_EQ(gradient[1], 0);       // limited
+  // u(time - 1): its guard is time - 1 (time crossings are located by root finding too).
+  EXPECT_DOUBLE_EQ(guards[4], 1.0);
+}
+
+TEST(BehavioralExpression, GradientIsExactForSmoothFunctions) {
+  Fixture fx;
+  // v(a)^2 * sin(v(b)) / (1 + exp(v(a) - v(b)))
+  auto numerator = binary(BinaryOperator::multiply, binary(BinaryOperator::power, voltage("a"), number(2)), call("sin", {voltage("b")}));
+  auto denominator = binary(BinaryOperator::add, number(1), call("exp", {voltage("a", "b")}));
+  BehavioralExpression e(*binary(BinaryOperator::divide, numerator, denominator), fx.unknowns, "b1");
+  const double a = 0.7, b = -0.4;
+  Vector x(2);
+  x << a, b;
+  double gradient[2];
+  const double value = e.evaluate(0, x, nullptr, gradient);
+  const double den = 1 + std::exp(a - b);
+  EXPECT_NEAR(value, a * a * std::sin(b) / den, 1e-15);
+  const double dda = 2 * a * std::sin(b) / den - a * a * std::sin(b) * std::exp(a - b) / (den * den);
+  const double ddb = a * a * std::cos(b) / den + a * a * std::sin(b) * std::exp(a - b) / (den * den);
+  EXPECT_NEAR(gradient[0], dda, 1e-14);
+  EXPECT_NEAR(gradient[1], ddb, 1e-14);
+}
+
+TEST(BehavioralExpression, DeadBranchNeverPoisonsTheGradient) {
+  Fixture fx;
+  // v(a) > 0 ? sqrt(v(a)) : 0, evaluated at v(a) < 0 with the predicate off
+  BehavioralExpression e(*conditional(binary(BinaryOperator::greater, voltage("a"), number(0)), call("sqrt", {voltage("a")}), number(0)),
+                         fx.unknowns, "b1");
+  Vector x(2);
+  x << -1, 0;
+  const std::uint8_t off = 0;
+  double gradient[1];
+  EXPECT_EQ(e.evaluate(0, x, &off, gradient), 0);
+  EXPECT_EQ(gradient[0], 0);
+}
+
+TEST(BehavioralExpression, EqualityUsesTwoPredicates) {
+  Fixture fx;
+  BehavioralExpression e(*conditional(binary(BinaryOperator::equal, voltage("a"), voltage("b")), number(1), number(0)), fx.unknowns, "b1");
+  EXPECT_EQ(e.predicate_count(), 2);
+  Vector x(2);
+  x << 1, 1;
+  const std::uint8_t neither[2] = {0, 0}, above[2] = {1, 0};
+  EXPECT_EQ(e.evaluate(0, x, neither, nullptr), 1);
+  EXPECT_EQ(e.evaluate(0, x, above, nullptr), 0);
+}
+
+TEST(BehavioralExpression, UnknownReferencesAreErrors) {
+  Fixture fx;
+  EXPECT_THROW(BehavioralExpression(*voltage("nowhere"), fx.unknowns, "b1"), ModelError);
+  EXPECT_THROW(BehavioralExpression(*current("v9"), fx.unknowns, "b1"), ModelError);
+  EXPECT_THROW(BehavioralExpression(*call("gamma", {number(1)}), fx.unknowns, "b1"), ModelError);
+}
+
+}  // namespace
+}  // namespace mna::test

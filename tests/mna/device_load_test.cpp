@@ -1,0 +1,194 @@
+// Each device's load against hand-derived f, q and Jacobians.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "helpers.hpp"
+
+namespace mna::test {
+namespace {
+
+constexpr double thermal_voltage = 1.38064852e-23 * 300.15 / 1.6021766208e-19;
+
+TEST(DeviceLoad, ResistorConductsFromHighToLowNode) {
+  CircuitSpec c;
+  c.add("r1", {"a", "b"}, 2.0);
+  Model m(c, {});
+  Vector x(2);
+  x << 3, 1;
+  const auto l = evaluate(m, 0, x, {});
+  EXPECT_DOUBLE_EQ(l.f[0], 1.0);  // (3 - 1) / 2 leaves node a
+  EXPECT_DOUBLE_EQ(l.f[1], -1.0);
+  Eigen::Matrix2d g;
+  g << 0.5, -0.5, -0.5, 0.5;
+  EXPECT_TRUE(l.df.isApprox(g));
+  EXPECT_TRUE(l.q.isZero());
+}
+
+TEST(DeviceLoad, CapacitorChargeAndStoredEnergy) {
+  CircuitSpec c;
+  c.add("c1", {"a", "0"}, 1e-6);
+  Model m(c, {});
+  Vector x(1);
+  x << 4;
+  const auto l = evaluate(m, 0, x, {});
+  EXPECT_DOUBLE_EQ(l.q[0], 4e-6);
+  EXPECT_DOUBLE_EQ(l.dq(0, 0), 1e-6);
+  EXPECT_EQ(m.kind(0), padae::UnknownKind::differential);
+  EXPECT_DOUBLE_EQ(m.stored_energy(x), 0.5 * 1e-6 * 16);
+}
+
+TEST(DeviceLoad, CoupledInductorsFluxRows) {
+  CircuitSpec c;
+  c.add("l1", {"a", "0"}, 4e-3);
+  c.add("l2", {"b", "0"}, 1e-3);
+  auto& k = c.add("k1", {}, 0.5);
+  k.controls = {"l1", "l2"};
+  Model m(c, {});
+  const int i1 = unknown(m, "i(l1)"), i2 = unknown(m, "i(l2)");
+  Vector x(4);
+  x << 2, 1, 0.3, -0.2;  // v(a), v(b), i(l1), i(l2)
+  ASSERT_EQ(i1, 2);
+  ASSERT_EQ(i2, 3);
+  const auto l = evaluate(m, 0, x, {});
+  const double mutual = 0.5 * std::sqrt(4e-3 * 1e-3);
+  EXPECT_DOUBLE_EQ(l.f[0], 0.3);  // the branch current leaves node a
+  EXPECT_DOUBLE_EQ(l.f[i1], 2.0); // v(a) - 0
+  EXPECT_DOUBLE_EQ(l.q[i1], -(4e-3 * 0.3 + mutual * -0.2));
+  EXPECT_DOUBLE_EQ(l.q[i2], -(1e-3 * -0.2 + mutual * 0.3));
+  EXPECT_DOUBLE_EQ(l.dq(i1, i2), -mutual);
+  EXPECT_DOUBLE_EQ(m.stored_energy(x), 0.5 * 4e-3 * 0.09 + 0.5 * 1e-3 * 0.04 + mutual * 0.3 * -0.2);
+}
+
+TEST(DeviceLoad, VoltageSourceFollowsItsWaveform) {
+  CircuitSpec c;
+  auto& v = c.add("v1", {"a", "0"});
+  v.waveform = {Waveform::Shape::pulse, {0, 5, 1e-3, 1e-3, 1e-3, 2e-3, 10e-3}};
+  c.add("r1", {"a", "0"}, 1.0);
+  Model m(c, {.tstep = 1e-4, .tstop = 10e-3});
+  Vector x(2);
+  x << 1, 0.5;
+  const auto l = evaluate(m, 1.5e-3, x, {});
+  EXPECT_DOUBLE_EQ(l.f[1], 1 - 2.5);  // v(a) - V(t), V halfway up the rise
+  EXPECT_DOUBLE_EQ(l.f[0], 0.5 + 1.0);
+  EXPECT_DOUBLE_EQ(m.next_time_event(1.5e-3), 2e-3);
+  // The source delivers -V * (charge through it) during a jump.
+  Vector impulse = Vector::Zero(2);
+  impulse[1] = -1e-6;
+  EXPECT_DOUBLE_EQ(m.devices()[0]->delivered_energy(2.5e-3, impulse), 5 * 1e-6);
+}
+
+TEST(DeviceLoad, ControlledSources) {
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}, 1.0);
+  c.add("e1", {"o1", "0", "in", "0"}, 3.0);
+  c.add("g1", {"o2", "0", "in", "0"}, 2.0).controls = {};
+  c.add("f1", {"o3", "0"}, 4.0).controls = {"v1"};
+  c.add("h1", {"o4", "0"}, 5.0).controls = {"v1"};
+  Model m(c, {});
+  Vector x = Vector::LinSpaced(m.size(), 1, m.size());
+  const int in = unknown(m, "v(in)"), o1 = unknown(m, "v(o1)"), o2 = unknown(m, "v(o2)"), o3 = unknown(m, "v(o3)"),
+            o4 = unknown(m, "v(o4)"), iv = unknown(m, "i(v1)"), ie = unknown(m, "i(e1)"), ih = unknown(m, "i(h1)");
+  const auto l = evaluate(m, 0, x, {});
+  EXPECT_DOUBLE_EQ(l.f[ie], x[o1] - 3 * x[in]);
+  EXPECT_DOUBLE_EQ(l.f[o2], 2 * x[in]);
+  EXPECT_DOUBLE_EQ(l.f[o3], 4 * x[iv]);
+  EXPECT_DOUBLE_EQ(l.f[ih], x[o4] - 5 * x[iv]);
+  EXPECT_DOUBLE_EQ(l.df(ie, in), -3);
+  EXPECT_DOUBLE_EQ(l.df(ih, iv), -5);
+}
+
+TEST(DeviceLoad, VoltageSwitchHysteresisGuardAndState) {
+  CircuitSpec c;
+  c.add("v1", {"ctl", "0"}, 0.0);
+  auto& s = c.add("s1", {"a", "0", "ctl", "0"});
+  s.model = {{"vt", 1.0}, {"vh", 0.2}, {"ron", 2.0}, {"roff", 1e6}};
+  c.add("r1", {"a", "0"}, 1.0);
+  Model m(c, {});
+  const int ctl = unknown(m, "v(ctl)"), a = unknown(m, "v(a)"), state = unknown(m, "state(s1)");
+  ASSERT_GE(state, 0);
+  EXPECT_EQ(m.kind(state), padae::UnknownKind::auxiliary);
+  ASSERT_EQ(m.predicate_count(), 1);
+  Vector x = Vector::Zero(m.size());
+  x[ctl] = 1.1, x[a] = 4;
+  Vector guard(1);
+  m.guards(0, x, guard);
+  EXPECT_NEAR(guard[0], 1.1 - 1.2, 1e-15);  // off: turns on above VT + VH
+  x[state] = 1;
+  m.guards(0, x, guard);
+  EXPECT_NEAR(guard[0], 1.1 - 0.8, 1e-15);  // on: stays on down to VT - VH
+  EXPECT_DOUBLE_EQ(evaluate(m, 0, x, {1}).f[a], 4 / 2.0 + 4 / 1.0);
+  EXPECT_DOUBLE_EQ(evaluate(m, 0, x, {0}).f[a], 4 / 1e6 + 4 / 1.0);
+  std::vector<padae::JumpEntry> jumps;
+  m.jump_matrix(0, x, {1}, jumps);
+  ASSERT_EQ(jumps.size(), 1u);
+  EXPECT_EQ(jumps[0].row, state);
+  EXPECT_EQ(jumps[0].value, 1.0);
+}
+
+TEST(DeviceLoad, IdealSwitchBranchRows) {
+  CircuitSpec c;
+  c.add("v1", {"ctl", "0"}, 0.0);
+  c.add("s1", {"a", "b", "ctl", "0"}).model = {{"ron", 0.0}, {"roff", infinity}};
+  c.add("r1", {"a", "0"}, 1.0);
+  c.add("r2", {"b", "0"}, 1.0);
+  Model m(c, {});
+  const int a = unknown(m, "v(a)"), b = unknown(m, "v(b)"), i = unknown(m, "i(s1)");
+  ASSERT_GE(i, 0);
+  Vector x = Vector::Zero(m.size());
+  x[a] = 3, x[b] = 1, x[i] = 0.25;
+  const auto on = evaluate(m, 0, x, {1});
+  EXPECT_DOUBLE_EQ(on.f[i], 2.0);  // v(a) - v(b) = 0 when closed
+  EXPECT_DOUBLE_EQ(on.df(i, i), 0.0);
+  const auto off = evaluate(m, 0, x, {0});
+  EXPECT_DOUBLE_EQ(off.f[i], -0.25);  // i = 0 when open
+  EXPECT_DOUBLE_EQ(off.df(i, a), 0.0);
+  EXPECT_DOUBLE_EQ(off.df(i, i), -1.0);
+  EXPECT_DOUBLE_EQ(off.f[a], 3 + 0.25);
+}
+
+TEST(DeviceLoad, IdealDiodeModeGuard) {
+  CircuitSpec c;
+  c.add("d1", {"a", "k"}).model = {{"ideal", 1}, {"vfwd", 0.7}, {"ron", 0.1}};
+  c.add("r1", {"a", "0"}, 1.0);
+  c.add("r2", {"k", "0"}, 1.0);
+  Model m(c, {});
+  const int a = unknown(m, "v(a)"), k = unknown(m, "v(k)"), i = unknown(m, "i(d1)"), mode = unknown(m, "mode(d1)");
+  Vector x = Vector::Zero(m.size());
+  x[a] = 2, x[k] = 1, x[i] = -0.5;
+  Vector guard(1);
+  m.guards(0, x, guard);
+  EXPECT_DOUBLE_EQ(guard[0], 2 - 1 - 0.7);  // off: turns on when v exceeds VFWD
+  x[mode] = 1;
+  m.guards(0, x, guard);
+  EXPECT_DOUBLE_EQ(guard[0], -0.5);  // on: turns off when the current falls below 0
+  EXPECT_DOUBLE_EQ(evaluate(m, 0, x, {1}).f[i], (1 - 0.7) / 0.1 - -0.5);
+  EXPECT_DOUBLE_EQ(evaluate(m, 0, x, {0}).f[i], 0.5);  // open: -i
+}
+
+TEST(DeviceLoad, ShockleyDiodeMatchesNgspiceEquations) {
+  CircuitSpec c;
+  auto& d = c.add("d1", {"a", "0"});
+  d.model = {{"is", 1e-14}, {"n", 1.5}, {"cjo", 2e-12}, {"vj", 0.8}, {"m", 0.4}};
+  Model m(c, {});
+  const double vte = 1.5 * thermal_voltage;
+  Vector x(1);
+  x << 0.6;
+  auto l = evaluate(m, 0, x, {});
+  EXPECT_NEAR(l.f[0], 1e-14 * (std::exp(0.6 / vte) - 1) + 1e-12 * 0.6, 1e-12 * std::abs(l.f[0]));
+  EXPECT_NEAR(l.df(0, 0), 1e-14 * std::exp(0.6 / vte) / vte + 1e-12, 1e-12 * l.df(0, 0));
+  // Above FC*VJ = 0.4 the depletion capacitance is extrapolated linearly.
+  const double f2 = std::pow(0.5, 1.4), f3 = 1 - 0.5 * 1.4;
+  EXPECT_NEAR(l.dq(0, 0), 2e-12 / f2 * (f3 + 0.4 * 0.6 / 0.8), 1e-24);
+  x << 0.3;
+  l = evaluate(m, 0, x, {});
+  EXPECT_NEAR(l.q[0], 0.8 * 2e-12 * (1 - std::pow(1 - 0.3 / 0.8, 0.6)) / 0.6, 1e-25);
+  x << -1.0;  // reverse: SPICE's cubic approach to -IS
+  l = evaluate(m, 0, x, {});
+  const double arg = std::pow(3 * vte / (-1.0 * std::numbers::e), 3);
+  EXPECT_NEAR(l.f[0], -1e-14 * (1 + arg) - 1e-12, 1e-26);
+}
+
+}  // namespace
+}  // namespace mna::test

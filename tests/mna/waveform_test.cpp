@@ -1,0 +1,88 @@
+// Source functions against their closed forms, with ngspice's defaults, and their corners.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "mna/device.hpp"
+#include "mna/waveform.hpp"
+
+namespace mna {
+namespace {
+
+using Shape = Waveform::Shape;
+const RunSettings run{.tstep = 1e-6, .tstop = 1e-3};
+
+TEST(Waveform, PulseRampsHoldsAndRepeats) {
+  SourceFunction f({Shape::pulse, {1, 5, 2e-6, 1e-6, 2e-6, 3e-6, 10e-6}}, 0, run, "v1");
+  EXPECT_DOUBLE_EQ(f.value(0), 1);
+  EXPECT_DOUBLE_EQ(f.value(2.5e-6), 3);        // halfway up the rise
+  EXPECT_DOUBLE_EQ(f.value(4e-6), 5);
+  EXPECT_DOUBLE_EQ(f.value(7e-6), 3);          // halfway down the fall (6 us .. 8 us)
+  EXPECT_DOUBLE_EQ(f.value(9e-6), 1);
+  EXPECT_NEAR(f.value(12.5e-6), 3, 1e-9);      // next period
+  EXPECT_DOUBLE_EQ(f.next_corner(0), 2e-6);
+  EXPECT_DOUBLE_EQ(f.next_corner(2e-6), 3e-6);
+  EXPECT_DOUBLE_EQ(f.next_corner(3e-6), 6e-6);
+  EXPECT_DOUBLE_EQ(f.next_corner(6e-6), 8e-6);
+  EXPECT_NEAR(f.next_corner(8e-6), 12e-6, 1e-18);
+  EXPECT_NEAR(f.next_corner(12.1e-6), 13e-6, 1e-18);
+}
+
+TEST(Waveform, PulseDefaultsFollowNgspice) {
+  // TR = TF = TSTEP when omitted or zero; PW = PER = TSTOP.
+  SourceFunction f({Shape::pulse, {0, 1, 0, 0}}, 0, run, "v1");
+  EXPECT_DOUBLE_EQ(f.value(0.5e-6), 0.5);
+  EXPECT_DOUBLE_EQ(f.value(0.5e-3), 1);
+  EXPECT_DOUBLE_EQ(f.next_corner(0), 1e-6);
+  EXPECT_DOUBLE_EQ(f.next_corner(1e-6), 1e-6 + 1e-3);
+}
+
+TEST(Waveform, PulseCountStopsRepeating) {
+  SourceFunction f({Shape::pulse, {0, 1, 0, 1e-6, 1e-6, 1e-6, 5e-6, 2}}, 0, run, "v1");
+  EXPECT_DOUBLE_EQ(f.value(6.5e-6), 1);  // second pulse
+  EXPECT_DOUBLE_EQ(f.value(11.5e-6), 0); // no third
+  EXPECT_EQ(f.next_corner(10e-6), infinity);
+}
+
+TEST(Waveform, SineWithDelayDampingAndPhase) {
+  using std::numbers::pi;
+  SourceFunction f({Shape::sine, {0.5, 2, 1e3, 1e-4, 100, 30}}, 0, run, "v1");
+  EXPECT_DOUBLE_EQ(f.value(0), 0.5 + 2 * std::sin(pi / 6));
+  const double t = 3e-4;
+  EXPECT_NEAR(f.value(t), 0.5 + 2 * std::sin(2 * pi * 1e3 * (t - 1e-4) + pi / 6) * std::exp(-(t - 1e-4) * 100), 1e-14);
+  EXPECT_DOUBLE_EQ(f.next_corner(0), 1e-4);
+  EXPECT_EQ(f.next_corner(1e-4), infinity);
+  // FREQ defaults to 1/TSTOP.
+  SourceFunction g({Shape::sine, {0, 1}}, 0, run, "v2");
+  EXPECT_NEAR(g.value(0.25e-3), 1, 1e-12);
+}
+
+TEST(Waveform, ExponentialRiseAndFall) {
+  SourceFunction f({Shape::exponential, {0, 1, 1e-6, 2e-6, 5e-6, 1e-6}}, 0, run, "v1");
+  EXPECT_DOUBLE_EQ(f.value(0.5e-6), 0);
+  EXPECT_NEAR(f.value(3e-6), 1 - std::exp(-1.0), 1e-15);
+  EXPECT_NEAR(f.value(7e-6), (1 - std::exp(-3.0)) - (1 - std::exp(-2.0)), 1e-15);
+  EXPECT_DOUBLE_EQ(f.next_corner(0), 1e-6);
+  EXPECT_DOUBLE_EQ(f.next_corner(1e-6), 5e-6);
+}
+
+TEST(Waveform, PiecewiseLinearInterpolatesAndHoldsEnds) {
+  SourceFunction f({Shape::piecewise_linear, {1e-6, 0, 2e-6, 4, 4e-6, 4, 5e-6, -1}}, 0, run, "v1");
+  EXPECT_DOUBLE_EQ(f.value(0), 0);
+  EXPECT_DOUBLE_EQ(f.value(1.5e-6), 2);
+  EXPECT_DOUBLE_EQ(f.value(3e-6), 4);
+  EXPECT_DOUBLE_EQ(f.value(4.5e-6), 1.5);
+  EXPECT_DOUBLE_EQ(f.value(9e-6), -1);
+  EXPECT_DOUBLE_EQ(f.next_corner(2e-6), 4e-6);
+  EXPECT_EQ(f.next_corner(5e-6), infinity);
+}
+
+TEST(Waveform, RejectsMalformedParameters) {
+  EXPECT_THROW(SourceFunction({Shape::piecewise_linear, {0, 1, 2}}, 0, run, "v1"), ModelError);
+  EXPECT_THROW(SourceFunction({Shape::piecewise_linear, {2, 1, 1, 0}}, 0, run, "v1"), ModelError);
+  EXPECT_THROW(SourceFunction({Shape::pulse, {0}}, 0, run, "v1"), ModelError);
+}
+
+}  // namespace
+}  // namespace mna

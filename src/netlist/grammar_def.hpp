@@ -45,23 +45,24 @@ struct finite_real_policies : x3::ureal_policies<double> {
 };
 inline x3::real_parser<double, finite_real_policies> const unsigned_real{};
 
-// The scale of an engineering suffix; the letters after it are units and ignored ("10uF",
-// "1kOhm"). Letters that are no suffix are units only ("5V"), as in SPICE.
-inline double suffix_scale(std::string_view letters) {
+// Applies an engineering suffix; the letters after it are units and ignored ("10uF",
+// "1kOhm"). Letters that are no suffix are units only ("5V"), as in SPICE. Small scales divide
+// by an exact power of ten, so that 10u is the double nearest to 1e-5 (10 * 1e-6 is not).
+inline double apply_suffix(double mantissa, std::string_view letters) {
   std::string suffix = lower(letters.substr(0, 3));
-  if (suffix == "meg") return 1e6;
-  if (suffix == "mil") return 25.4e-6;
-  if (suffix.empty()) return 1.0;
+  if (suffix == "meg") return mantissa * 1e6;
+  if (suffix == "mil") return mantissa * 254 / 1e7;  // 25.4e-6
+  if (suffix.empty()) return mantissa;
   switch (suffix[0]) {
-    case 'f': return 1e-15;
-    case 'p': return 1e-12;
-    case 'n': return 1e-9;
-    case 'u': return 1e-6;
-    case 'm': return 1e-3;
-    case 'k': return 1e3;
-    case 'g': return 1e9;
-    case 't': return 1e12;
-    default: return 1.0;
+    case 'f': return mantissa / 1e15;
+    case 'p': return mantissa / 1e12;
+    case 'n': return mantissa / 1e9;
+    case 'u': return mantissa / 1e6;
+    case 'm': return mantissa / 1e3;
+    case 'k': return mantissa * 1e3;
+    case 'g': return mantissa * 1e9;
+    case 't': return mantissa * 1e12;
+    default: return mantissa;
   }
 }
 
@@ -74,7 +75,7 @@ inline std::optional<double> number_value(Iterator first, Iterator last) {
   if (!x3::parse(first, last, unsigned_real, mantissa)) return std::nullopt;
   if (!std::all_of(first, last, [](char c) { return std::isalpha(static_cast<unsigned char>(c)); }))
     return std::nullopt;
-  double value = mantissa * suffix_scale(std::string_view(&*first, static_cast<std::size_t>(last - first)));
+  double value = apply_suffix(mantissa, std::string_view(&*first, static_cast<std::size_t>(last - first)));
   if (!std::isfinite(value)) return std::nullopt;
   return negative ? -value : value;
 }
@@ -187,11 +188,11 @@ struct FunctionArity {
   std::string_view name;
   std::size_t arguments;
 };
-inline constexpr std::array<FunctionArity, 26> functions{{
+inline constexpr std::array<FunctionArity, 25> functions{{
     {"exp", 1}, {"ln", 1}, {"log", 1}, {"log10", 1}, {"sqrt", 1}, {"sin", 1}, {"cos", 1},
     {"tan", 1}, {"atan", 1}, {"atan2", 2}, {"sinh", 1}, {"cosh", 1}, {"tanh", 1}, {"abs", 1},
     {"min", 2}, {"max", 2}, {"pow", 2}, {"pwr", 2}, {"sgn", 1}, {"u", 1}, {"uramp", 1},
-    {"limit", 3}, {"floor", 1}, {"ceil", 1}, {"if", 3}, {"asin", 1},
+    {"limit", 3}, {"floor", 1}, {"ceil", 1}, {"if", 3},
 }};
 
 inline auto const make_call = [](auto& context) {
@@ -299,7 +300,7 @@ auto const inductor_name_def = name_def;
 auto const subcircuit_name_def = name_def;
 auto const identifier_def =
     x3::raw[lexeme[(x3::alpha | x3::char_('_')) >> *identifier_char]][make_word];
-auto const directive_def = x3::raw[lexeme['.' >> +x3::alnum]][make_word];
+auto const directive_def = lit('.') >> x3::raw[lexeme[+x3::alnum]][make_word];
 auto const path_def = x3::raw[lexeme[('"' >> *~x3::char_('"') >> '"') |
                                      ('\'' >> *~x3::char_('\'') >> '\'') |
                                      +~x3::char_(" \t")]][make_path];

@@ -1,0 +1,828 @@
+// Elaboration: AST -> FlatCircuit. Parameters are evaluated in dependency order, subcircuits
+// expanded with hierarchical names, references (models, controlling sources, inductors)
+// checked.
+//
+// Which ignored cards are errors: an analysis padsim does not run (.ac .dc .op .noise ...) is
+// only a warning when the netlist has a .tran (the transient result is what was asked for);
+// without a .tran it is an error. Output-only cards (.plot .four .meas ...) and unknown dot
+// cards are warnings. Cards that would change the circuit (.global .func .if ...) were
+// rejected by the parser.
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <numbers>
+#include <set>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "netlist/netlist.hpp"
+
+namespace netlist {
+
+namespace {
+
+constexpr int max_subcircuit_depth = 100;
+
+bool is_one_of(const std::string& name, std::initializer_list<const char*> names) {
+  for (const char* candidate : names)
+    if (name == candidate) return true;
+  return false;
+}
+
+bool truthy(double value) { return value != 0.0; }
+
+double apply_function(const std::string& name, const std::vector<double>& a) {
+  if (name == "exp") return std::exp(a[0]);
+  if (name == "ln" || name == "log") return std::log(a[0]);  // ngspice: log is natural
+  if (name == "log10") return std::log10(a[0]);
+  if (name == "sqrt") return std::sqrt(a[0]);
+  if (name == "sin") return std::sin(a[0]);
+  if (name == "cos") return std::cos(a[0]);
+  if (name == "tan") return std::tan(a[0]);
+  if (name == "atan") return std::atan(a[0]);
+  if (name == "atan2") return std::atan2(a[0], a[1]);
+  if (name == "sinh") return std::sinh(a[0]);
+  if (name == "cosh") return std::cosh(a[0]);
+  if (name == "tanh") return std::tanh(a[0]);
+  if (name == "abs") return std::fabs(a[0]);
+  if (name == "min") return std::fmin(a[0], a[1]);
+  if (name == "max") return std::fmax(a[0], a[1]);
+  if (name == "pow") return std::pow(a[0], a[1]);
+  if (name == "pwr") return std::copysign(std::pow(std::fabs(a[0]), a[1]), a[0]);
+  if (name == "sgn") return a[0] > 0 ? 1.0 : a[0] < 0 ? -1.0 : 0.0;
+  if (name == "u") return a[0] > 0 ? 1.0 : 0.0;
+  if (name == "uramp") return a[0] > 0 ? a[0] : 0.0;
+  if (name == "limit") return std::fmin(std::fmax(a[0], a[1]), a[2]);
+  if (name == "floor") return std::floor(a[0]);
+  if (name == "ceil") return std::ceil(a[0]);
+  return std::nan("");  // the parser admits only the functions above
+}
+
+double apply_binary(BinaryOperator op, double l, double r) {
+  switch (op) {
+    case BinaryOperator::add: return l + r;
+    case BinaryOperator::subtract: return l - r;
+    case BinaryOperator::multiply: return l * r;
+    case BinaryOperator::divide: return l / r;
+    case BinaryOperator::power: return std::pow(l, r);
+    case BinaryOperator::less: return l < r;
+    case BinaryOperator::less_equal: return l <= r;
+    case BinaryOperator::greater: return l > r;
+    case BinaryOperator::greater_equal: return l >= r;
+    case BinaryOperator::equal: return l == r;
+    case BinaryOperator::not_equal: return l != r;
+    case BinaryOperator::logical_and: return truthy(l) && truthy(r);
+    case BinaryOperator::logical_or: return truthy(l) || truthy(r);
+  }
+  return std::nan("");
+}
+
+// Parameter values of one subcircuit instance (or the top level), falling back to the
+// enclosing instance's.
+struct Scope {
+  const Scope* parent = nullptr;
+  std::unordered_map<std::string, double> values;
+
+  const double* find(const std::string& name) const {
+    for (const Scope* scope = this; scope; scope = scope->parent) {
+      auto found = scope->values.find(name);
+      if (found != scope->values.end()) return &found->second;
+    }
+    return nullptr;
+  }
+};
+
+// Subcircuits and models defined in one body, falling back to the enclosing body's.
+struct Definitions {
+  const Definitions* parent = nullptr;
+  std::string prefix;  // of the instance whose body this is: models defined here get it
+  std::unordered_map<std::string, const ast::Subcircuit*> subcircuits;
+  std::unordered_map<std::string, const ast::ModelCard*> models;
+
+  const ast::Subcircuit* find_subcircuit(const std::string& name) const {
+    for (const Definitions* d = this; d; d = d->parent)
+      if (auto found = d->subcircuits.find(name); found != d->subcircuits.end()) return found->second;
+    return nullptr;
+  }
+  // The model card and the flat name of the model it became.
+  std::pair<const ast::ModelCard*, std::string> find_model(const std::string& name) const {
+    for (const Definitions* d = this; d; d = d->parent)
+      if (auto found = d->models.find(name); found != d->models.end())
+        return {found->second, d->prefix + name};
+    return {nullptr, ""};
+  }
+};
+
+// Where the cards of one body (top level or an instance's subcircuit) go in the flat circuit.
+struct Instance {
+  std::string prefix;                                 // "" or "x1." or "x1.x2."
+  std::unordered_map<std::string, std::string> ports;  // subcircuit port -> connected node
+  const Scope* scope;
+  const Definitions* definitions;
+  std::vector<std::string> subcircuit_chain;  // subcircuits being expanded, outermost first
+
+  std::string node(const std::string& name) const {
+    if (name == "0" || name == "gnd") return "0";
+    if (auto port = ports.find(name); port != ports.end()) return port->second;
+    return prefix + name;
+  }
+  std::string element(const std::string& name) const { return prefix + name; }
+};
+
+class Elaborator {
+ public:
+  explicit Elaborator(Diagnostics& diagnostics) : diagnostics_(diagnostics) {}
+
+  std::optional<FlatCircuit> run(const ast::Netlist& netlist) {
+    int errors_before = diagnostics_.error_count();
+    circuit_.title = netlist.title;
+    std::vector<const ast::Card*> cards;
+    flatten_includes(netlist.cards, cards);
+    has_tran_ = std::any_of(cards.begin(), cards.end(), [](const ast::Card* card) {
+      return std::holds_alternative<ast::TranCard>(card->node);
+    });
+    Scope global;
+    Definitions definitions;
+    Instance top{"", {}, &global, &definitions, {}};
+    elaborate_body(cards, top, global, definitions);
+    check_references();
+    for (const Diagnostic& diagnostic : diagnostics_.all())
+      if (diagnostic.severity != Severity::error) circuit_.warnings.push_back(diagnostic);
+    if (diagnostics_.error_count() > errors_before) return std::nullopt;
+    return std::move(circuit_);
+  }
+
+ private:
+  static void flatten_includes(const std::vector<ast::Card>& cards,
+                               std::vector<const ast::Card*>& out) {
+    for (const ast::Card& card : cards) {
+      if (auto* include = std::get_if<ast::Include>(&card.node))
+        flatten_includes(include->cards, out);
+      else
+        out.push_back(&card);
+    }
+  }
+
+  // ---- expressions ------------------------------------------------------------------------
+
+  std::optional<double> evaluate(const Expression& expression, const Scope& scope) {
+    return std::visit(
+        [&](const auto& node) -> std::optional<double> { return evaluate_node(node, expression, scope); },
+        expression.node);
+  }
+
+  std::optional<double> evaluate_node(const Number& number, const Expression&, const Scope&) {
+    return number.value;
+  }
+  std::optional<double> evaluate_node(const ParameterRef& ref, const Expression& e, const Scope& scope) {
+    if (const double* value = scope.find(ref.name)) return *value;
+    if (ref.name == "pi") return std::numbers::pi;
+    diagnostics_.error(e.where, "parameter '" + ref.name + "' is not defined");
+    return std::nullopt;
+  }
+  std::optional<double> evaluate_node(const NodeVoltage&, const Expression& e, const Scope&) {
+    diagnostics_.error(e.where, "a node voltage is only allowed in a B source expression");
+    return std::nullopt;
+  }
+  std::optional<double> evaluate_node(const BranchCurrent&, const Expression& e, const Scope&) {
+    diagnostics_.error(e.where, "a branch current is only allowed in a B source expression");
+    return std::nullopt;
+  }
+  std::optional<double> evaluate_node(const Time&, const Expression& e, const Scope&) {
+    diagnostics_.error(e.where, "time is only allowed in a B source expression");
+    return std::nullopt;
+  }
+  std::optional<double> evaluate_node(const Unary& unary, const Expression&, const Scope& scope) {
+    auto operand = evaluate(*unary.operand, scope);
+    if (!operand) return std::nullopt;
+    return unary.op == UnaryOperator::negate ? -*operand : double(!truthy(*operand));
+  }
+  std::optional<double> evaluate_node(const Binary& binary, const Expression&, const Scope& scope) {
+    auto left = evaluate(*binary.left, scope);
+    auto right = evaluate(*binary.right, scope);
+    if (!left || !right) return std::nullopt;
+    return apply_binary(binary.op, *left, *right);
+  }
+  std::optional<double> evaluate_node(const Conditional& c, const Expression&, const Scope& scope) {
+    auto condition = evaluate(*c.condition, scope);
+    if (!condition) return std::nullopt;
+    return evaluate(truthy(*condition) ? *c.if_true : *c.if_false, scope);
+  }
+  std::optional<double> evaluate_node(const Call& call, const Expression&, const Scope& scope) {
+    std::vector<double> arguments;
+    for (const ExpressionPtr& argument : call.arguments) {
+      auto value = evaluate(*argument, scope);
+      if (!value) return std::nullopt;
+      arguments.push_back(*value);
+    }
+    return apply_function(call.function, arguments);
+  }
+
+  // A value that must be a finite number.
+  std::optional<double> value(const ExpressionPtr& expression, const Scope& scope) {
+    if (auto* number = std::get_if<Number>(&expression->node)) return number->value;
+    auto result = evaluate(*expression, scope);
+    if (result && !std::isfinite(*result)) {
+      diagnostics_.error(expression->where, "the value is not a finite number");
+      return std::nullopt;
+    }
+    return result;
+  }
+
+  // A B-source expression with parameters replaced by their values and names made
+  // hierarchical.
+  ExpressionPtr substitute(const ExpressionPtr& expression, const Instance& instance) {
+    auto make = [&](decltype(Expression::node) node) {
+      return std::make_shared<const Expression>(Expression{std::move(node), expression->where});
+    };
+    const auto& node = expression->node;
+    if (std::holds_alternative<ParameterRef>(node)) {
+      auto result = evaluate(*expression, *instance.scope);
+      return result ? make(Number{*result}) : nullptr;
+    }
+    if (auto* voltage = std::get_if<NodeVoltage>(&node))
+      return make(NodeVoltage{instance.node(voltage->node),
+                              voltage->reference.empty() ? "" : instance.node(voltage->reference)});
+    if (auto* current = std::get_if<BranchCurrent>(&node)) {
+      branch_current_uses_.push_back({instance.element(current->element), expression->where});
+      return make(BranchCurrent{instance.element(current->element)});
+    }
+    if (auto* unary = std::get_if<Unary>(&node)) {
+      auto operand = substitute(unary->operand, instance);
+      return operand ? make(Unary{unary->op, operand}) : nullptr;
+    }
+    if (auto* binary = std::get_if<Binary>(&node)) {
+      auto left = substitute(binary->left, instance);
+      auto right = substitute(binary->right, instance);
+      return left && right ? make(Binary{binary->op, left, right}) : nullptr;
+    }
+    if (auto* conditional = std::get_if<Conditional>(&node)) {
+      auto condition = substitute(conditional->condition, instance);
+      auto if_true = substitute(conditional->if_true, instance);
+      auto if_false = substitute(conditional->if_false, instance);
+      return condition && if_true && if_false ? make(Conditional{condition, if_true, if_false})
+                                              : nullptr;
+    }
+    if (auto* call = std::get_if<Call>(&node)) {
+      Call result{call->function, {}};
+      for (const ExpressionPtr& argument : call->arguments) {
+        result.arguments.push_back(substitute(argument, instance));
+        if (!result.arguments.back()) return nullptr;
+      }
+      return make(std::move(result));
+    }
+    return expression;  // Number, Time
+  }
+
+  // ---- parameters -------------------------------------------------------------------------
+
+  struct PendingParameter {
+    ExpressionPtr expression;
+    SourceRange where;
+    enum { pending, evaluating, done } state = pending;
+  };
+
+  // Evaluates `definitions` into `scope` in dependency order; a cycle is an error naming it.
+  void evaluate_parameters(std::vector<std::pair<ast::Word, ExpressionPtr>> const& definitions,
+                           Scope& scope) {
+    std::unordered_map<std::string, PendingParameter> pending;
+    std::vector<std::string> order;
+    for (const auto& [name, expression] : definitions) {
+      if (auto existing = pending.find(name.text); existing != pending.end()) {
+        diagnostics_.warning(name.where, "parameter '" + name.text + "' is defined again; this "
+                                         "definition replaces the earlier one");
+        existing->second = {expression, name.where};
+        continue;
+      }
+      pending.emplace(name.text, PendingParameter{expression, name.where});
+      order.push_back(name.text);
+    }
+    std::vector<std::string> stack;
+    std::function<bool(const std::string&)> resolve = [&](const std::string& name) -> bool {
+      PendingParameter& parameter = pending.at(name);
+      if (parameter.state == PendingParameter::done) return scope.values.count(name) > 0;
+      if (parameter.state == PendingParameter::evaluating) {
+        std::string cycle;
+        auto start = std::find(stack.begin(), stack.end(), name);
+        for (auto it = start; it != stack.end(); ++it) cycle += *it + " -> ";
+        diagnostics_.error(pending.at(*start).where, "parameter cycle: " + cycle + name);
+        return false;
+      }
+      parameter.state = PendingParameter::evaluating;
+      stack.push_back(name);
+      bool dependencies_resolved = true;
+      visit_references(*parameter.expression, [&](const std::string& reference) {
+        if (pending.count(reference) && !resolve(reference)) dependencies_resolved = false;
+      });
+      stack.pop_back();
+      parameter.state = PendingParameter::done;
+      if (!dependencies_resolved) return false;
+      auto result = value(parameter.expression, scope);
+      if (!result) return false;
+      scope.values[name] = *result;
+      return true;
+    };
+    for (const std::string& name : order) resolve(name);
+  }
+
+  template <typename Visitor>
+  static void visit_references(const Expression& expression, Visitor&& visitor) {
+    std::visit(
+        [&](const auto& node) {
+          using Node = std::decay_t<decltype(node)>;
+          if constexpr (std::is_same_v<Node, ParameterRef>) {
+            visitor(node.name);
+          } else if constexpr (std::is_same_v<Node, Unary>) {
+            visit_references(*node.operand, visitor);
+          } else if constexpr (std::is_same_v<Node, Binary>) {
+            visit_references(*node.left, visitor);
+            visit_references(*node.right, visitor);
+          } else if constexpr (std::is_same_v<Node, Conditional>) {
+            visit_references(*node.condition, visitor);
+            visit_references(*node.if_true, visitor);
+            visit_references(*node.if_false, visitor);
+          } else if constexpr (std::is_same_v<Node, Call>) {
+            for (const auto& argument : node.arguments) visit_references(*argument, visitor);
+          }
+        },
+        expression.node);
+  }
+
+  // ---- bodies -----------------------------------------------------------------------------
+
+  void elaborate_body(const std::vector<const ast::Card*>& cards, const Instance& instance,
+                      Scope& scope, Definitions& definitions) {
+    std::vector<std::pair<ast::Word, ExpressionPtr>> parameters;
+    for (const ast::Card* card : cards) {
+      if (auto* subcircuit = std::get_if<ast::Subcircuit>(&card->node)) {
+        bool inserted = definitions.subcircuits.emplace(subcircuit->name.text, subcircuit).second;
+        if (!inserted && warned_cards_.insert(card).second)
+          diagnostics_.error(subcircuit->name.where,
+                             "subcircuit '" + subcircuit->name.text + "' is defined twice");
+      } else if (auto* model = std::get_if<ast::ModelCard>(&card->node)) {
+        bool inserted = definitions.models.emplace(model->name.text, model).second;
+        if (!inserted && warned_cards_.insert(card).second)
+          diagnostics_.error(model->name.where, "model '" + model->name.text + "' is defined twice");
+      } else if (auto* param = std::get_if<ast::ParamCard>(&card->node)) {
+        for (const ast::Assignment& assignment : param->assignments)
+          parameters.emplace_back(assignment.name, assignment.value);
+      }
+    }
+    evaluate_parameters(parameters, scope);
+    for (const ast::Card* card : cards)  // in netlist order; a duplicate was reported above
+      if (auto* model = std::get_if<ast::ModelCard>(&card->node);
+          model && definitions.models.at(model->name.text) == model)
+        elaborate_model(*model, instance);
+    for (const ast::Card* card : cards)
+      std::visit([&](const auto& node) { elaborate_card(node, *card, instance); }, card->node);
+  }
+
+  void elaborate_model(const ast::ModelCard& card, const Instance& instance) {
+    static const std::map<std::string, std::pair<ModelType, std::vector<std::string>>> known = {
+        {"d",
+         {ModelType::diode,
+          {"is", "n", "rs", "cjo", "cj0", "vj", "m", "tt", "bv", "ibv", "eg", "xti", "fc", "ideal",
+           "ron", "roff", "vfwd"}}},
+        {"sw", {ModelType::voltage_switch, {"vt", "vh", "ron", "roff"}}},
+        {"csw", {ModelType::current_switch, {"it", "ih", "ron", "roff"}}},
+    };
+    bool first_time = warned_models_.insert(&card).second;  // warn once, not per instance
+    auto type = known.find(card.type.text);
+    if (type == known.end()) {
+      if (first_time)
+        diagnostics_.warning(card.type.where, "model type '" + card.type.text +
+                                                  "' is not supported by padsim; model '" +
+                                                  card.name.text + "' is ignored");
+      return;
+    }
+    FlatModel model{instance.prefix + card.name.text, type->second.first, {}, card.name.where};
+    const auto& names = type->second.second;
+    for (const ast::Assignment& parameter : card.parameters) {
+      if (first_time && std::find(names.begin(), names.end(), parameter.name.text) == names.end())
+        diagnostics_.warning(parameter.name.where, "unknown " + card.type.text + " model parameter '" +
+                                                       parameter.name.text + "' is kept but unused");
+      if (auto v = value(parameter.value, *instance.scope))
+        model.parameters[parameter.name.text] = {*v, parameter.name.where};
+    }
+    circuit_.models.push_back(std::move(model));
+  }
+
+  FlatElement element_of(ElementKind kind, const ast::Word& name, const Instance& instance) {
+    FlatElement element;
+    element.kind = kind;
+    element.name = instance.element(name.text);
+    element.where = name.where;
+    return element;
+  }
+
+  void add(FlatElement element) {
+    auto [existing, inserted] = element_index_.emplace(element.name, circuit_.elements.size());
+    if (!inserted) {
+      diagnostics_.error(element.where, "element '" + element.name + "' is defined twice");
+      diagnostics_.note(circuit_.elements[existing->second].where, "first defined here");
+      return;
+    }
+    circuit_.elements.push_back(std::move(element));
+  }
+
+  // Instance parameters an element accepts (name -> stored where).
+  void element_parameters(const std::vector<ast::Assignment>& parameters, FlatElement& element,
+                          const char* kind_name, const Instance& instance) {
+    for (const ast::Assignment& parameter : parameters) {
+      if (parameter.name.text == "ic" && element.kind != ElementKind::resistor) {
+        element.initial_condition = value(parameter.value, *instance.scope);
+        continue;
+      }
+      diagnostics_.error(parameter.name.where, "unknown parameter '" + parameter.name.text +
+                                                   "' for " + kind_name + " " + element.name);
+    }
+  }
+
+  void elaborate_card(const ast::TwoTerminal& card, const ast::Card&, const Instance& instance) {
+    char letter = card.name.text[0];
+    ElementKind kind = letter == 'r' ? ElementKind::resistor
+                       : letter == 'c' ? ElementKind::capacitor
+                                       : ElementKind::inductor;
+    const char* kind_name = letter == 'r' ? "resistor" : letter == 'c' ? "capacitor" : "inductor";
+    FlatElement element = element_of(kind, card.name, instance);
+    element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text)};
+    auto v = value(card.value, *instance.scope);
+    if (!v) return;
+    element.value = *v;
+    element_parameters(card.parameters, element, kind_name, instance);
+    add(std::move(element));
+  }
+
+  void elaborate_card(const ast::Coupling& card, const ast::Card&, const Instance& instance) {
+    FlatElement element = element_of(ElementKind::coupling, card.name, instance);
+    element.controls = {instance.element(card.first.text), instance.element(card.second.text)};
+    auto v = value(card.value, *instance.scope);
+    if (!v) return;
+    element.value = *v;
+    control_uses_.push_back({element.controls[0], 'l', card.first.where});
+    control_uses_.push_back({element.controls[1], 'l', card.second.where});
+    add(std::move(element));
+  }
+
+  void elaborate_card(const ast::IndependentSource& card, const ast::Card&, const Instance& instance) {
+    ElementKind kind =
+        card.name.text[0] == 'v' ? ElementKind::voltage_source : ElementKind::current_source;
+    FlatElement element = element_of(kind, card.name, instance);
+    element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text)};
+    bool valid = true;
+    for (const ast::SourceSpec& spec : card.specs) {
+      const std::string& spec_kind = spec.kind.text;
+      if (spec_kind == "ac") continue;  // accepted and ignored: padsim runs no AC analysis
+      std::vector<double> args;
+      for (const ExpressionPtr& arg : spec.args) {
+        auto v = value(arg, *instance.scope);
+        if (!v) valid = false;
+        args.push_back(v.value_or(0.0));
+      }
+      if (spec_kind.empty() || spec_kind == "dc") {
+        element.source.dc = args.at(0);
+        continue;
+      }
+      Waveform waveform{spec_kind == "pulse" ? WaveformKind::pulse
+                        : spec_kind == "sin" ? WaveformKind::sin
+                        : spec_kind == "exp" ? WaveformKind::exp
+                                             : WaveformKind::pwl,
+                        std::move(args), std::nullopt, std::nullopt, spec.kind.where};
+      for (const ast::Assignment& option : spec.options) {
+        auto v = value(option.value, *instance.scope);
+        if (!v) valid = false;
+        (option.name.text == "r" ? waveform.repeat_from : waveform.delay) = v;
+      }
+      if (valid && waveform.kind == WaveformKind::pwl) valid = check_pwl(waveform, spec);
+      element.source.waveform = std::move(waveform);
+    }
+    if (valid) add(std::move(element));
+  }
+
+  bool check_pwl(const Waveform& waveform, const ast::SourceSpec& spec) {
+    for (std::size_t i = 2; i < waveform.args.size(); i += 2) {
+      if (waveform.args[i] < waveform.args[i - 2]) {
+        diagnostics_.error(spec.args[i]->where, "pwl times must not decrease");
+        return false;
+      }
+    }
+    if (waveform.repeat_from) {
+      bool is_time_point = false;
+      for (std::size_t i = 0; i < waveform.args.size(); i += 2)
+        is_time_point |= waveform.args[i] == *waveform.repeat_from;
+      if (!is_time_point) {
+        const auto& option = *std::find_if(spec.options.begin(), spec.options.end(),
+                                           [](const ast::Assignment& a) { return a.name.text == "r"; });
+        diagnostics_.error(option.value->where, "pwl r= must be one of the time points");
+        return false;
+      }
+    }
+    return true;
+  }
+
+  void elaborate_card(const ast::VoltageControlled& card, const ast::Card&, const Instance& instance) {
+    ElementKind kind = card.name.text[0] == 'e' ? ElementKind::vcvs : ElementKind::vccs;
+    FlatElement element = element_of(kind, card.name, instance);
+    element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text),
+                     instance.node(card.control_positive.text),
+                     instance.node(card.control_negative.text)};
+    auto v = value(card.gain, *instance.scope);
+    if (!v) return;
+    element.value = *v;
+    add(std::move(element));
+  }
+
+  void elaborate_card(const ast::CurrentControlled& card, const ast::Card&, const Instance& instance) {
+    ElementKind kind = card.name.text[0] == 'f' ? ElementKind::cccs : ElementKind::ccvs;
+    FlatElement element = element_of(kind, card.name, instance);
+    element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text)};
+    element.controls = {instance.element(card.control.text)};
+    control_uses_.push_back({element.controls[0], 'v', card.control.where});
+    auto v = value(card.gain, *instance.scope);
+    if (!v) return;
+    element.value = *v;
+    add(std::move(element));
+  }
+
+  void elaborate_card(const ast::Behavioral& card, const ast::Card&, const Instance& instance) {
+    FlatElement element = element_of(ElementKind::behavioral, card.name, instance);
+    element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text)};
+    element.behavioral_is_voltage = card.quantity.text == "v";
+    element.expression = substitute(card.expression, instance);
+    if (element.expression) add(std::move(element));
+  }
+
+  // The flat name of a model of the wanted type, or nullopt (error reported).
+  std::optional<std::string> model_for(const ast::Word& name, const char* type,
+                                       const char* element_kind, const Instance& instance) {
+    auto [model, flat_name] = instance.definitions->find_model(name.text);
+    if (!model) {
+      diagnostics_.error(name.where, "model '" + name.text + "' is not defined");
+      return std::nullopt;
+    }
+    if (model->type.text != type) {
+      diagnostics_.error(name.where, "model '" + name.text + "' is a " + model->type.text +
+                                         " model; " + element_kind + " needs a " + type + " model");
+      return std::nullopt;
+    }
+    return flat_name;
+  }
+
+  void elaborate_card(const ast::Diode& card, const ast::Card&, const Instance& instance) {
+    FlatElement element = element_of(ElementKind::diode, card.name, instance);
+    element.nodes = {instance.node(card.anode.text), instance.node(card.cathode.text)};
+    auto model = model_for(card.model, "d", "a diode", instance);
+    element.value = 1.0;
+    if (card.area) {
+      auto area = value(*card.area, *instance.scope);
+      if (!area) return;
+      element.value = *area;
+    }
+    element.off = card.off;
+    element_parameters(card.parameters, element, "diode", instance);
+    if (!model) return;
+    element.model = *model;
+    add(std::move(element));
+  }
+
+  void elaborate_card(const ast::VoltageSwitch& card, const ast::Card&, const Instance& instance) {
+    FlatElement element = element_of(ElementKind::voltage_switch, card.name, instance);
+    element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text),
+                     instance.node(card.control_positive.text),
+                     instance.node(card.control_negative.text)};
+    auto model = model_for(card.model, "sw", "a voltage-controlled switch", instance);
+    if (!model) return;
+    element.model = *model;
+    if (card.state) element.initially_on = card.state->text == "on";
+    add(std::move(element));
+  }
+
+  void elaborate_card(const ast::CurrentSwitch& card, const ast::Card&, const Instance& instance) {
+    FlatElement element = element_of(ElementKind::current_switch, card.name, instance);
+    element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text)};
+    element.controls = {instance.element(card.control.text)};
+    control_uses_.push_back({element.controls[0], 'v', card.control.where});
+    auto model = model_for(card.model, "csw", "a current-controlled switch", instance);
+    if (!model) return;
+    element.model = *model;
+    if (card.state) element.initially_on = card.state->text == "on";
+    add(std::move(element));
+  }
+
+  void elaborate_card(const ast::Instance& card, const ast::Card&, const Instance& instance) {
+    const ast::Subcircuit* subcircuit = instance.definitions->find_subcircuit(card.subcircuit.text);
+    if (!subcircuit) {
+      diagnostics_.error(card.subcircuit.where,
+                         "subcircuit '" + card.subcircuit.text + "' is not defined");
+      return;
+    }
+    const auto& chain = instance.subcircuit_chain;
+    if (std::find(chain.begin(), chain.end(), subcircuit->name.text) != chain.end() ||
+        chain.size() >= max_subcircuit_depth) {
+      diagnostics_.error(card.subcircuit.where,
+                         "subcircuit '" + subcircuit->name.text + "' instantiates itself");
+      return;
+    }
+    if (card.nodes.size() != subcircuit->ports.size()) {
+      diagnostics_.error(card.name.where,
+                         card.name.text + " connects " + std::to_string(card.nodes.size()) +
+                             " nodes; subcircuit '" + subcircuit->name.text + "' has " +
+                             std::to_string(subcircuit->ports.size()) + " ports");
+      return;
+    }
+    Instance inner;
+    inner.prefix = instance.element(card.name.text) + ".";
+    for (std::size_t i = 0; i < card.nodes.size(); ++i)
+      inner.ports[subcircuit->ports[i].text] = instance.node(card.nodes[i].text);
+    inner.subcircuit_chain = chain;
+    inner.subcircuit_chain.push_back(subcircuit->name.text);
+
+    // Instance values are evaluated where the instance is; defaults inside the subcircuit.
+    Scope scope{instance.scope, {}};
+    std::set<std::string> overridden;
+    for (const ast::Assignment& parameter : card.parameters) {
+      bool declared = std::any_of(subcircuit->parameters.begin(), subcircuit->parameters.end(),
+                                  [&](const ast::Assignment& p) { return p.name.text == parameter.name.text; });
+      if (!declared) {
+        diagnostics_.error(parameter.name.where, "subcircuit '" + subcircuit->name.text +
+                                                     "' has no parameter '" + parameter.name.text + "'");
+        return;
+      }
+      auto v = value(parameter.value, *instance.scope);
+      if (!v) return;  // reported; expanding with the default would only add follow-up errors
+      scope.values[parameter.name.text] = *v;
+      overridden.insert(parameter.name.text);
+    }
+    std::vector<const ast::Card*> cards;
+    std::vector<ast::Card> defaults;  // the defaults not overridden, as .param cards first
+    ast::ParamCard default_parameters;
+    for (const ast::Assignment& parameter : subcircuit->parameters)
+      if (!overridden.count(parameter.name.text)) default_parameters.assignments.push_back(parameter);
+    defaults.push_back(ast::Card{std::move(default_parameters), subcircuit->name.where});
+    cards.push_back(&defaults.back());
+    flatten_includes(subcircuit->body, cards);
+
+    Definitions definitions{instance.definitions, inner.prefix, {}, {}};
+    inner.scope = &scope;
+    inner.definitions = &definitions;
+    elaborate_body(cards, inner, scope, definitions);
+  }
+
+  // Collected by elaborate_body before the elements.
+  void elaborate_card(const ast::ParamCard&, const ast::Card&, const Instance&) {}
+  void elaborate_card(const ast::ModelCard&, const ast::Card&, const Instance&) {}
+  void elaborate_card(const ast::Subcircuit&, const ast::Card&, const Instance&) {}
+  void elaborate_card(const ast::Include&, const ast::Card&, const Instance&) {}
+
+  bool at_top_level(const ast::Card& card, const Instance& instance, const char* what) {
+    if (instance.prefix.empty()) return true;
+    if (warned_cards_.insert(&card).second)
+      diagnostics_.warning(card.where, std::string(what) + " inside a subcircuit is ignored");
+    return false;
+  }
+
+  void elaborate_card(const ast::TranCard& card, const ast::Card& whole, const Instance& instance) {
+    if (!at_top_level(whole, instance, ".tran")) return;
+    auto step = value(card.step, *instance.scope);
+    auto stop = value(card.stop, *instance.scope);
+    std::optional<double> start = 0.0;
+    if (card.start) start = value(*card.start, *instance.scope);
+    std::optional<double> max_step;
+    if (card.max_step && !(max_step = value(*card.max_step, *instance.scope))) return;
+    if (!step || !stop || !start) return;
+    if (!(*step > 0)) {
+      diagnostics_.error(card.step->where, ".tran needs a positive time step");
+      return;
+    }
+    if (!(*stop > *start)) {
+      diagnostics_.error(card.stop->where, ".tran needs a stop time after the start time");
+      return;
+    }
+    if (circuit_.tran)
+      diagnostics_.warning(card.directive.where, "a second .tran replaces the first");
+    circuit_.tran = Transient{*step, *stop, *start, max_step, card.uic, card.directive.where};
+  }
+
+  void elaborate_card(const ast::NodeValuesCard& card, const ast::Card&, const Instance& instance) {
+    auto& target = card.directive.text == "ic" ? circuit_.initial_conditions : circuit_.nodesets;
+    for (const ast::NodeAssignment& assignment : card.values) {
+      auto v = value(assignment.value, *instance.scope);
+      if (!v) continue;
+      target.push_back({instance.node(assignment.node.text),
+                        assignment.reference ? instance.node(assignment.reference->text) : "", *v,
+                        assignment.node.where});
+    }
+  }
+
+  void elaborate_card(const ast::OptionsCard& card, const ast::Card& whole, const Instance& instance) {
+    if (!at_top_level(whole, instance, ".options")) return;
+    for (const ast::OptionItem& item : card.items) {
+      Option option{item.name.text, std::nullopt, item.word ? item.word->text : "", item.name.where};
+      if (item.number && !(option.number = value(*item.number, *instance.scope))) continue;
+      circuit_.options.push_back(std::move(option));
+    }
+  }
+
+  void elaborate_card(const ast::OutputCard& card, const ast::Card& whole, const Instance& instance) {
+    std::string what = "." + card.directive.text;
+    if (!at_top_level(whole, instance, what.c_str())) return;
+    bool first = true;
+    for (const ast::OutputItem& item : card.items) {
+      bool is_first = std::exchange(first, false);
+      const std::string& function = item.function.text;
+      SourceRange where = item.function.text.empty() ? item.args[0].where : item.function.where;
+      if (function.empty()) {
+        const std::string& word = item.args[0].text;
+        if (is_first && card.directive.text != "save" && is_one_of(word, {"tran", "ac", "dc", "op"}))
+          continue;  // .print tran v(1): the analysis
+        if (word == "all") {
+          circuit_.saves.push_back({OutputRequest::Kind::all, "", "", "", where});
+          continue;
+        }
+        circuit_.saves.push_back({OutputRequest::Kind::node_voltage, instance.node(word), "", "", where});
+      } else if (function == "v" && item.args.size() <= 2) {
+        circuit_.saves.push_back({OutputRequest::Kind::node_voltage, instance.node(item.args[0].text),
+                                  item.args.size() == 2 ? instance.node(item.args[1].text) : "", "",
+                                  where});
+      } else if (function == "i" && item.args.size() == 1) {
+        circuit_.saves.push_back({OutputRequest::Kind::branch_current, "", "",
+                                  instance.element(item.args[0].text), where});
+      } else {
+        diagnostics_.warning(where, "output '" + function + "(...)' is not supported and ignored");
+      }
+    }
+  }
+
+  void elaborate_card(const ast::TempCard& card, const ast::Card& whole, const Instance& instance) {
+    if (!at_top_level(whole, instance, ".temp")) return;
+    circuit_.temperature = value(card.value, *instance.scope);
+  }
+
+  void elaborate_card(const ast::TitleCard& card, const ast::Card&, const Instance&) {
+    circuit_.title = card.text;
+  }
+
+  void elaborate_card(const ast::IgnoredCard& card, const ast::Card& whole, const Instance&) {
+    if (!warned_cards_.insert(&whole).second) return;
+    const std::string& directive = card.directive.text;
+    if (is_one_of(directive, {"ac", "dc", "op", "noise", "tf", "pz", "sens", "disto", "sp", "pss"})) {
+      if (has_tran_)
+        diagnostics_.warning(card.directive.where,
+                             "." + directive + " is ignored: padsim runs the transient analysis only");
+      else
+        diagnostics_.error(card.directive.where, "." + directive +
+                                                     " is not supported: padsim runs transient "
+                                                     "analysis (.tran) only");
+    } else if (is_one_of(directive, {"width", "plot", "four", "fourier", "meas", "measure", "csparam"})) {
+      diagnostics_.warning(card.directive.where, "." + directive + " is ignored");
+    } else {
+      diagnostics_.warning(card.directive.where, "unknown dot card '." + directive + "' is ignored");
+    }
+  }
+
+  // ---- references -------------------------------------------------------------------------
+
+  struct ControlUse {
+    std::string element;
+    char kind;  // the element letter it must be: 'v' or 'l'
+    SourceRange where;
+  };
+
+  void check_references() {
+    auto check = [&](const std::string& name, char kind, const SourceRange& where) {
+      const char* what = kind == 'v' ? "voltage source" : "inductor";
+      auto found = element_index_.find(name);
+      if (found == element_index_.end())
+        diagnostics_.error(where, std::string(what) + " '" + name + "' is not defined");
+      else if (static_cast<char>(circuit_.elements[found->second].kind) != kind)
+        diagnostics_.error(where, "'" + name + "' is not a " + what);
+    };
+    for (const ControlUse& use : control_uses_) check(use.element, use.kind, use.where);
+    for (const auto& [name, where] : branch_current_uses_) check(name, 'v', where);
+  }
+
+  Diagnostics& diagnostics_;
+  FlatCircuit circuit_;
+  bool has_tran_ = false;
+  std::unordered_map<std::string, std::size_t> element_index_;
+  std::vector<ControlUse> control_uses_;
+  std::vector<std::pair<std::string, SourceRange>> branch_current_uses_;
+  std::unordered_set<const void*> warned_models_;
+  std::unordered_set<const void*> warned_cards_;
+};
+
+}  // namespace
+
+std::optional<FlatCircuit> elaborate(const ast::Netlist& netlist, Diagnostics& diagnostics) {
+  return Elaborator(diagnostics).run(netlist);
+}
+
+std::optional<FlatCircuit> load(const std::filesystem::path& path, Diagnostics& diagnostics) {
+  ast::Netlist netlist = parse_file(path, diagnostics);
+  if (diagnostics.has_errors()) return std::nullopt;
+  return elaborate(netlist, diagnostics);
+}
+
+}  // namespace netlist

@@ -229,6 +229,15 @@ Vector Model::initial_conditions() const {
   return x0;
 }
 
+padae::Predicates Model::initial_predicates(double t, const Vector& x) const {
+  Vector values = Vector::Zero(predicate_count_);
+  guards(t, x, values);
+  padae::Predicates p(predicate_count_);
+  for (int k = 0; k < predicate_count_; ++k) p[k] = values[k] > 0;
+  for (const auto& entry : jump_entries_) p[entry.predicate] = x[entry.row] > 0.5;
+  return p;
+}
+
 double Model::stored_energy(const Vector& x) const {
   double energy = 0;
   for (const auto& d : devices_) energy += d->stored_energy(x);

@@ -51,6 +51,9 @@ class Model final : public padae::System {
   // x0 for a start from initial conditions (uic): IC= of capacitors and inductors, .ic node
   // voltages, switch ON/OFF; everything else 0.
   Vector initial_conditions() const;
+  // Predicates at (t, x) from the guards, except that a predicate an auxiliary mode follows
+  // (a switch's state, an ideal diode's mode) starts equal to that mode.
+  padae::Predicates initial_predicates(double t, const Vector& x) const;
   // The .ic node voltages: held fixed while computing the operating point (as ngspice does).
   const std::map<int, double>& held_nodes() const { return held_nodes_; }
   void hold_initial_voltages(bool hold) { holding_ = hold; }

@@ -31,6 +31,10 @@ bool is_one_of(const std::string& name, std::initializer_list<const char*> names
   return false;
 }
 
+std::string count(std::size_t n, const std::string& noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
 bool truthy(double value) { return value != 0.0; }
 
 double apply_function(const std::string& name, const std::vector<double>& a) {
@@ -626,10 +630,10 @@ class Elaborator {
       return;
     }
     if (card.nodes.size() != subcircuit->ports.size()) {
-      diagnostics_.error(card.name.where,
-                         card.name.text + " connects " + std::to_string(card.nodes.size()) +
-                             " nodes; subcircuit '" + subcircuit->name.text + "' has " +
-                             std::to_string(subcircuit->ports.size()) + " ports");
+      diagnostics_.error(card.name.where, card.name.text + " connects " +
+                                              count(card.nodes.size(), "node") + "; subcircuit '" +
+                                              subcircuit->name.text + "' has " +
+                                              count(subcircuit->ports.size(), "port"));
       return;
     }
     Instance inner;

@@ -414,6 +414,7 @@ x3::rule<class ac_word_id, ast::Word> const ac_word = "ac";
 x3::rule<class quantity_id, ast::Word> const quantity = "V= or I=";
 x3::rule<class switch_state_id, ast::Word> const switch_state = "on or off";
 x3::rule<class instance_node_id, ast::Word> const instance_node = "a node name";
+x3::rule<class instance_nodes_id, std::vector<ast::Word>> const instance_nodes = "a node name";
 
 auto const two_terminal_card_def =
     element_name > node > node > value > *assignment > end_of_card;
@@ -445,8 +446,9 @@ auto const voltage_switch_card_def =
 auto const current_switch_card_def =
     element_name > node > node > source_name > model_name > -switch_state > end_of_card;
 auto const instance_node_def = !params_keyword >> node >> !lit('=');
+auto const instance_nodes_def = +instance_node;
 auto const instance_card_def =
-    element_name > +instance_node > -params_keyword > *parameter > end_of_card;
+    element_name > instance_nodes > -params_keyword > *parameter > end_of_card;
 
 // ---- dot cards -----------------------------------------------------------------------------
 
@@ -518,7 +520,7 @@ BOOST_SPIRIT_DEFINE(unary, power, primary, node_voltage, branch_current, call, a
                     coupling_card, source_card, voltage_controlled_card, current_controlled_card,
                     behavioral_card, diode_card, voltage_switch_card, current_switch_card)
 BOOST_SPIRIT_DEFINE(instance_card, source_spec, waveform_spec, dc_spec, ac_spec, bare_spec,
-                    waveform_kind, dc_word, ac_word, quantity, switch_state, instance_node,
+                    waveform_kind, dc_word, ac_word, quantity, switch_state, instance_node, instance_nodes,
                     param_card, model_card, subckt_card, ends_card, include_card, tran_card,
                     node_values_card, options_card)
 BOOST_SPIRIT_DEFINE(output_card, temp_card, parameters, model_type, model_parameters, port,

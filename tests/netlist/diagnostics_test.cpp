@@ -1,0 +1,174 @@
+// Malformed netlists: each gives exactly the expected first error, at the expected place.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "netlist/netlist.hpp"
+
+namespace {
+
+struct Malformed {
+  const char* text;  // the first line is the title
+  int line, column;
+  const char* message;
+};
+
+// Columns are 1-based and counted by hand from the card text.
+const Malformed malformed[] = {
+    // card syntax
+    {"t\nR1 in\n", 2, 6, "expected a node name"},
+    {"t\nR2 a b 1k 2k\n", 2, 11, "unexpected '2k'"},
+    {"t\nQ1 c b e npn\n", 2, 1, "unknown element letter 'Q'"},
+    {"t\n{R1 a b 1\n", 2, 1, "expected an element or a dot card"},
+    {"t\n+ R1 a b 1\n", 2, 1, "continuation line '+' without a card to continue"},
+    {"t\nR3 a b nan\n", 2, 8, "expected a value"},
+    {"t\nR1 a b inf\n", 2, 8, "expected a value"},
+    {"t\nR4 a b 1k3\n", 2, 8, "expected a value"},
+    {"t\nS1 a b c d\n", 2, 11, "expected a model name"},
+    {"t\nW1 a b\n", 2, 7, "expected a voltage source name"},
+    {"t\nK1 l1\n", 2, 6, "expected an inductor name"},
+    {"t\nB1 a b x={1}\n", 2, 8, "expected V= or I="},
+    {"t\nB1 a b v=\n", 2, 10, "expected an expression"},
+    {"t\nX1\n", 2, 3, "expected a node name"},
+    {"t\nV1 a 0 pulse(0 1\n", 2, 17, "expected ')'"},
+    {"t\nV1 a 0 pulse(0)\n", 2, 8, "pulse takes 2 to 8 values, not 1"},
+    {"t\nV1 a 0 sin(0 1 2 3 4 5 6)\n", 2, 8, "sin takes 2 to 6 values, not 7"},
+    {"t\nV1 a 0 pwl(0 0 1)\n", 2, 8, "pwl takes time-value pairs, not 3 values"},
+    {"t\nV1 a 0 dc 1 2\n", 2, 13, "a second DC value for v1"},
+    {"t\nV1 a 0 sin(0 1 1k) pulse(0 1)\n", 2, 20, "a second waveform for v1"},
+    {"t\nV1 a 0 sin(0 1 1k) td=1\n", 2, 20, "unknown sin parameter 'td'"},
+    // expressions
+    {"t\nR1 a b {1+}\n", 2, 11, "expected an expression"},
+    {"t\nR1 a b {(1+2}\n", 2, 13, "expected ')'"},
+    {"t\nE1 a b c d {foo(1)}\n", 2, 13, "unknown function 'foo'"},
+    {"t\nC1 a b {min(1)}\n", 2, 9, "function 'min' takes 2 arguments, not 1"},
+    {"t\nB1 a b v={if(1,2)}\n", 2, 11, "function 'if' takes 3 arguments, not 2"},
+    // dot cards
+    {"t\n.tran 1n\n", 2, 9, "expected a value"},
+    {"t\n.model d1 D(is=inf)\n", 2, 16, "expected a value"},
+    {"t\n.ic v(a)\n", 2, 9, "expected '='"},
+    {"t\n.param 1x=2\n", 2, 8, "expected name=value"},
+    {"t\n.lib models.lib\n", 2, 16, "expected a library section name"},
+    {"t\n.include nofile.cir\n", 2, 10, "cannot read 'nofile.cir'"},
+    {"t\n.global vdd\n", 2, 1, ".global is not supported by padsim"},
+    {"t\n.control\nrun\n", 2, 1, ".control without .endc"},
+    {"t\n.subckt s a b\nR1 a b 1\n", 2, 9, "missing .ends for subcircuit 's'"},
+    {"t\n.ends\n", 2, 1, ".ends without .subckt"},
+    {"t\n.subckt s a b\nR1 a b 1\n.ends t\n", 4, 7, "'.ends t' closes subcircuit 's'"},
+    // elaboration
+    {"t\n.tran 0 1u\n", 2, 7, ".tran needs a positive time step"},
+    {"t\n.tran 1n 0\n", 2, 10, ".tran needs a stop time after the start time"},
+    {"t\n.ac dec 10 1 1k\n", 2, 1, ".ac is not supported: padsim runs transient analysis (.tran) only"},
+    {"t\nD1 a b dmod\n", 2, 8, "model 'dmod' is not defined"},
+    {"t\n.model sm sw(vt=1)\nD1 a b sm\n", 3, 8, "model 'sm' is a sw model; a diode needs a d model"},
+    {"t\nF1 a b vx 2\n", 2, 8, "voltage source 'vx' is not defined"},
+    {"t\nR9 a 0 1\nF1 a b r9 2\n", 3, 8, "'r9' is not a voltage source"},
+    {"t\nB1 a 0 v={i(vy)}\n", 2, 11, "voltage source 'vy' is not defined"},
+    {"t\nK1 l1 l2 0.5\n", 2, 4, "inductor 'l1' is not defined"},
+    {"t\nX1 a b sub\n", 2, 8, "subcircuit 'sub' is not defined"},
+    {"t\n.subckt sub p\nR1 p 0 1\n.ends\nX1 a b sub\n", 5, 1,
+     "x1 connects 2 nodes; subcircuit 'sub' has 1 port"},
+    {"t\n.subckt sub p\nR1 p 0 1\n.ends\nX1 a sub w=1\n", 5, 10,
+     "subcircuit 'sub' has no parameter 'w'"},
+    {"t\n.subckt loop p\nX1 p loop\n.ends\nX1 a loop\n", 3, 6, "subcircuit 'loop' instantiates itself"},
+    {"t\n.param a={b} b={a}\n", 2, 8, "parameter cycle: a -> b -> a"},
+    {"t\nR1 a b {k}\n", 2, 9, "parameter 'k' is not defined"},
+    {"t\nR1 a b 1\nR1 c d 2\n", 3, 1, "element 'r1' is defined twice"},
+    {"t\nR1 a b {v(a)}\n", 2, 9, "a node voltage is only allowed in a B source expression"},
+    {"t\nR1 a b {1/0}\n", 2, 9, "the value is not a finite number"},
+    {"t\nR1 a b 1 m=2\n", 2, 10, "unknown parameter 'm' for resistor r1"},
+    {"t\nV1 a 0 pwl(0 0 2 1 1 0)\n", 2, 20, "pwl times must not decrease"},
+    {"t\nV1 a 0 pwl(0 0 1 1) r=0.5\n", 2, 23, "pwl r= must be one of the time points"},
+};
+
+// The first error of parsing and, if parsing succeeded, elaborating.
+const netlist::Diagnostic* first_error(const std::string& text, netlist::Diagnostics& diagnostics) {
+  netlist::ast::Netlist parsed = netlist::parse_text(text, "t.cir", diagnostics);
+  if (!diagnostics.has_errors()) netlist::elaborate(parsed, diagnostics);
+  const auto& all = diagnostics.all();
+  auto error = std::find_if(all.begin(), all.end(), [](const netlist::Diagnostic& d) {
+    return d.severity == netlist::Severity::error;
+  });
+  return error == all.end() ? nullptr : &*error;
+}
+
+TEST(Diagnostics, MalformedNetlists) {
+  EXPECT_GE(std::size(malformed), 40u);
+  for (const Malformed& m : malformed) {
+    netlist::Diagnostics diagnostics;
+    const netlist::Diagnostic* error = first_error(m.text, diagnostics);
+    ASSERT_NE(error, nullptr) << m.text;
+    EXPECT_EQ(error->message, m.message) << m.text;
+    EXPECT_EQ(error->where.begin.line, m.line) << m.text;
+    EXPECT_EQ(error->where.begin.column, m.column) << m.text;
+    ASSERT_TRUE(error->where.begin.file) << m.text;
+    EXPECT_EQ(error->where.begin.file->path, "t.cir") << m.text;
+  }
+}
+
+TEST(Diagnostics, FormatNamesFileLineColumnWithCaret) {
+  netlist::Diagnostics diagnostics;
+  const netlist::Diagnostic* error = first_error("t\nR2 a b 1k 2k\n", diagnostics);
+  ASSERT_NE(error, nullptr);
+  EXPECT_EQ(netlist::format(*error),
+            "t.cir:2:11: error: unexpected '2k'\n"
+            "  R2 a b 1k 2k\n"
+            "            ^~\n");
+}
+
+TEST(Diagnostics, CaretUnderContinuationLine) {
+  netlist::Diagnostics diagnostics;
+  const netlist::Diagnostic* error = first_error("t\nR1 a\n+  b nan\n", diagnostics);
+  ASSERT_NE(error, nullptr);
+  EXPECT_EQ(netlist::format(*error),
+            "t.cir:3:6: error: expected a value\n"
+            "  +  b nan\n"
+            "       ^~~\n");
+}
+
+TEST(Diagnostics, SeveralErrorsInOnePass) {
+  netlist::Diagnostics diagnostics;
+  netlist::parse_text("t\nR1 in\nQ1 a b c npn\nR2 a b 1k\nC1 a b {1+}\nV1 a 0 pulse(0)\n", "t.cir",
+                      diagnostics);
+  std::vector<int> lines;
+  for (const auto& d : diagnostics.all())
+    if (d.severity == netlist::Severity::error) lines.push_back(d.where.begin.line);
+  EXPECT_EQ(lines, (std::vector<int>{2, 3, 5, 6}));
+}
+
+TEST(Diagnostics, IncludeCycleIsDetected) {
+  netlist::Diagnostics diagnostics;
+  std::string path = std::string(NETLIST_TEST_DATA) + "/invalid/cycle_a.cir";
+  netlist::parse_file(path, diagnostics);
+  ASSERT_EQ(diagnostics.error_count(), 1);
+  const netlist::Diagnostic& error = diagnostics.all().front();
+  EXPECT_EQ(error.where.begin.file->path, std::string(NETLIST_TEST_DATA) + "/invalid/cycle_b.inc");
+  EXPECT_EQ(error.where.begin.line, 1);
+  EXPECT_EQ(error.where.begin.column, 10);
+  EXPECT_NE(error.message.find("include cycle: "), std::string::npos) << error.message;
+  EXPECT_NE(error.message.find("cycle_a.cir -> "), std::string::npos) << error.message;
+}
+
+TEST(Diagnostics, HarmlessCardsWarnWithPosition) {
+  netlist::Diagnostics diagnostics;
+  auto circuit = netlist::load(std::string(NETLIST_TEST_DATA) + "/buck.cir", diagnostics);
+  ASSERT_TRUE(circuit) << diagnostics.to_string();
+  netlist::Diagnostics more;
+  auto parsed = netlist::parse_text("t\nR1 a 0 1\n.tran 1n 1u\n.op\n.four 1k v(a)\n.frobnicate\n"
+                                    ".model q1 npn(bf=100)\n.model d1 d(is=1e-14 zz=1)\n",
+                                    "t.cir", more);
+  auto flat = netlist::elaborate(parsed, more);
+  ASSERT_TRUE(flat) << more.to_string();
+  std::vector<std::pair<int, std::string>> warnings;
+  for (const auto& d : flat->warnings) warnings.emplace_back(d.where.begin.line, d.message);
+  std::sort(warnings.begin(), warnings.end());
+  EXPECT_EQ(warnings, (std::vector<std::pair<int, std::string>>{
+                          {4, ".op is ignored: padsim runs the transient analysis only"},
+                          {5, ".four is ignored"},
+                          {6, "unknown dot card '.frobnicate' is ignored"},
+                          {7, "model type 'npn' is not supported by padsim; model 'q1' is ignored"},
+                          {8, "unknown d model parameter 'zz' is kept but unused"},
+                      }));
+}
+
+}  // namespace

@@ -1,0 +1,257 @@
+// Elaboration against hand-computed values: parameters, functions, subcircuit flattening,
+// sources, models, includes and the analysis cards.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "netlist/netlist.hpp"
+
+namespace {
+
+using netlist::ElementKind;
+using netlist::FlatCircuit;
+
+FlatCircuit elaborate_text(const std::string& text) {
+  netlist::Diagnostics diagnostics;
+  auto parsed = netlist::parse_text(text, "t.cir", diagnostics);
+  auto circuit = netlist::elaborate(parsed, diagnostics);
+  EXPECT_TRUE(circuit) << diagnostics.to_string();
+  return circuit ? *circuit : FlatCircuit{};
+}
+
+FlatCircuit load_data(const std::string& name) {
+  netlist::Diagnostics diagnostics;
+  auto circuit = netlist::load(std::string(NETLIST_TEST_DATA) + "/" + name, diagnostics);
+  EXPECT_TRUE(circuit) << diagnostics.to_string();
+  return circuit ? *circuit : FlatCircuit{};
+}
+
+const netlist::FlatElement& element(const FlatCircuit& circuit, const std::string& name) {
+  const netlist::FlatElement* found = circuit.find_element(name);
+  if (!found) throw std::runtime_error("no element " + name);
+  return *found;
+}
+
+// The value of a resistor whose value is `expression`, after .param lines `params`.
+double value_of(const std::string& expression, const std::string& params = "") {
+  FlatCircuit circuit = elaborate_text("t\n" + params + "\nR1 a 0 {" + expression + "}\n");
+  return circuit.elements.empty() ? std::nan("") : circuit.elements[0].value;
+}
+
+TEST(Elaborate, ParametersInDependencyOrder) {
+  const std::string params = ".param c={b/a} b={a*3+1}\n.param a=2";
+  EXPECT_EQ(value_of("a", params), 2.0);
+  EXPECT_EQ(value_of("b", params), 7.0);
+  EXPECT_EQ(value_of("c", params), 3.5);
+  EXPECT_EQ(value_of("y", ".param x=1k y='x/4'"), 250.0);
+}
+
+TEST(Elaborate, OperatorsAndPrecedence) {
+  EXPECT_EQ(value_of("1+2*3"), 7.0);
+  EXPECT_EQ(value_of("(1+2)*3"), 9.0);
+  EXPECT_EQ(value_of("-2^2"), -4.0);  // as ngspice: unary minus binds looser than ^
+  EXPECT_EQ(value_of("2**3"), 8.0);
+  EXPECT_EQ(value_of("2^3^2"), 512.0);  // right associative
+  EXPECT_EQ(value_of("2^-1"), 0.5);
+  EXPECT_EQ(value_of("8/2/2"), 2.0);  // left associative
+  EXPECT_EQ(value_of("10-4-3"), 3.0);
+  EXPECT_EQ(value_of("1 < 2"), 1.0);
+  EXPECT_EQ(value_of("2 <= 1"), 0.0);
+  EXPECT_EQ(value_of("3 > 2 == 1"), 1.0);
+  EXPECT_EQ(value_of("2 >= 2 && 1 != 1 || !0"), 1.0);
+  EXPECT_EQ(value_of("1 && 0"), 0.0);
+  EXPECT_EQ(value_of("0 ? 10 : 1 ? 20 : 30"), 20.0);
+  EXPECT_EQ(value_of("1 + 1 > 1 ? 5 : 6"), 5.0);
+  EXPECT_EQ(value_of("if(0, 1, 2)"), 2.0);
+  EXPECT_EQ(value_of("2k*3m"), 6.0);
+}
+
+TEST(Elaborate, Functions) {
+  EXPECT_EQ(value_of("exp(0)"), 1.0);
+  EXPECT_EQ(value_of("ln(1)"), 0.0);
+  EXPECT_DOUBLE_EQ(value_of("log(100)"), std::log(100.0));  // ngspice: log is natural
+  EXPECT_DOUBLE_EQ(value_of("log10(1000)"), 3.0);
+  EXPECT_EQ(value_of("sqrt(16)"), 4.0);
+  EXPECT_EQ(value_of("sin(0)+cos(0)+tan(0)+atan(0)"), 1.0);
+  EXPECT_DOUBLE_EQ(value_of("atan2(1, 1)"), std::numbers::pi / 4);
+  EXPECT_EQ(value_of("sinh(0)+cosh(0)+tanh(0)"), 1.0);
+  EXPECT_EQ(value_of("abs(-3)"), 3.0);
+  EXPECT_EQ(value_of("min(3, 4)"), 3.0);
+  EXPECT_EQ(value_of("max(3, 4)"), 4.0);
+  EXPECT_EQ(value_of("pow(2, 10)"), 1024.0);
+  EXPECT_EQ(value_of("pwr(-2, 2)"), -4.0);  // sign(x) |x|^y
+  EXPECT_EQ(value_of("sgn(-3)"), -1.0);
+  EXPECT_EQ(value_of("u(1) + u(0) + u(-1)"), 1.0);
+  EXPECT_EQ(value_of("uramp(-1) + uramp(2)"), 2.0);
+  EXPECT_EQ(value_of("limit(5, 0, 3) + limit(-1, 0, 3)"), 3.0);
+  EXPECT_EQ(value_of("floor(1.5) + ceil(1.5)"), 3.0);
+  EXPECT_DOUBLE_EQ(value_of("2*pi"), 2 * std::numbers::pi);
+}
+
+TEST(Elaborate, SubcircuitsFlattenWithHierarchicalNames) {
+  FlatCircuit circuit = load_data("subckts.cir");
+  // outer k=5 passes r = k*3 = 15 to inner; inner's R1 = r*g = 15*10.
+  const auto& r1 = element(circuit, "x5.x1.r1");
+  EXPECT_EQ(r1.kind, ElementKind::resistor);
+  EXPECT_EQ(r1.value, 150.0);
+  EXPECT_EQ(r1.nodes, (std::vector<std::string>{"in", "x5.x1.mid"}));
+  const auto& r2 = element(circuit, "x5.x1.r2");
+  EXPECT_EQ(r2.value, 15.0);
+  EXPECT_EQ(r2.nodes, (std::vector<std::string>{"x5.x1.mid", "x5.n1"}));
+  EXPECT_EQ(element(circuit, "x5.c1").nodes, (std::vector<std::string>{"x5.n1", "0"}));
+  // xa uses outer's default k=2: r = 6, R1 = 60; gnd is the global ground.
+  EXPECT_EQ(element(circuit, "xa.x1.r1").value, 60.0);
+  EXPECT_EQ(element(circuit, "xa.x1.r2").value, 6.0);
+  EXPECT_EQ(element(circuit, "xa.c1").nodes, (std::vector<std::string>{"xa.n1", "0"}));
+  EXPECT_EQ(circuit.elements.size(), 7u);
+  ASSERT_TRUE(circuit.tran);
+  EXPECT_EQ(circuit.tran->step, 1e-9);
+  EXPECT_EQ(circuit.tran->stop, 1e-6);
+}
+
+TEST(Elaborate, SubcircuitReferencesBecomeHierarchical) {
+  FlatCircuit circuit = elaborate_text(
+      "t\n"
+      ".subckt stage in out params: gain=3\n"
+      "Vs in mid 0\n"
+      "B1 out 0 V={gain*v(mid) + i(vs)}\n"
+      "F1 out 0 vs 2\n"
+      "D1 mid 0 dlocal\n"
+      "W1 mid 0 vs wsw\n"
+      ".model dlocal D(is={gain*1e-15})\n"
+      ".model wsw CSW(it=1m)\n"
+      ".ends\n"
+      "X1 a b stage gain=4\n");
+  const auto& b1 = element(circuit, "x1.b1");
+  EXPECT_TRUE(b1.behavioral_is_voltage);
+  EXPECT_EQ(netlist::print(*b1.expression), "((4 * v(x1.mid)) + i(x1.vs))");
+  EXPECT_EQ(b1.nodes, (std::vector<std::string>{"b", "0"}));
+  EXPECT_EQ(element(circuit, "x1.vs").nodes, (std::vector<std::string>{"a", "x1.mid"}));
+  EXPECT_EQ(element(circuit, "x1.f1").controls, (std::vector<std::string>{"x1.vs"}));
+  EXPECT_EQ(element(circuit, "x1.d1").model, "x1.dlocal");
+  EXPECT_EQ(element(circuit, "x1.w1").model, "x1.wsw");
+  const netlist::FlatModel* model = circuit.find_model("x1.dlocal");
+  ASSERT_NE(model, nullptr);
+  EXPECT_EQ(model->type, netlist::ModelType::diode);
+  EXPECT_EQ(model->get("is"), 4e-15);
+}
+
+TEST(Elaborate, SourcesAndControlledSources) {
+  FlatCircuit circuit = load_data("sources.cir");
+  EXPECT_EQ(element(circuit, "v1").source.dc, 1.0);
+  EXPECT_FALSE(element(circuit, "v1").source.waveform);
+  const auto& pulse = *element(circuit, "v2").source.waveform;
+  EXPECT_EQ(pulse.kind, netlist::WaveformKind::pulse);
+  EXPECT_EQ(pulse.args, (std::vector<double>{0, 1, 1e-9, 2e-9, 3e-9, 4e-9, 10e-9, 5}));
+  const auto& sine = *element(circuit, "v3").source.waveform;
+  EXPECT_EQ(sine.kind, netlist::WaveformKind::sin);
+  EXPECT_EQ(sine.args, (std::vector<double>{0.5, 1, 1e6, 0, 0, 90}));
+  EXPECT_EQ(element(circuit, "v4").source.waveform->args,
+            (std::vector<double>{0, 1, 1e-6, 1e-6, 2e-6, 1e-6}));
+  const auto& pwl = *element(circuit, "v5").source.waveform;
+  EXPECT_EQ(pwl.kind, netlist::WaveformKind::pwl);
+  EXPECT_EQ(pwl.args, (std::vector<double>{0, 0, 1e-6, 1, 2e-6, 1, 3e-6, 0}));
+  EXPECT_EQ(pwl.repeat_from, 1e-6);
+  EXPECT_EQ(pwl.delay, 0.5e-6);
+  EXPECT_EQ(element(circuit, "i1").kind, ElementKind::current_source);
+  EXPECT_EQ(element(circuit, "i1").source.dc, 1e-3);
+  EXPECT_EQ(element(circuit, "i2").source.dc, 0.0);
+  EXPECT_EQ(element(circuit, "i2").source.waveform->args, (std::vector<double>{0, 0, 1e-9, 1e-3}));
+  EXPECT_EQ(element(circuit, "e1").nodes, (std::vector<std::string>{"h", "0", "a", "0"}));
+  EXPECT_EQ(element(circuit, "e1").value, 2.0);
+  EXPECT_EQ(element(circuit, "g1").value, 1e-3);
+  EXPECT_EQ(element(circuit, "f1").controls, (std::vector<std::string>{"v1"}));
+  EXPECT_EQ(element(circuit, "h1").value, 100.0);
+  EXPECT_EQ(element(circuit, "l1").initial_condition, 1e-3);
+  EXPECT_EQ(element(circuit, "k1").controls, (std::vector<std::string>{"l1", "l2"}));
+  EXPECT_EQ(element(circuit, "k1").value, 0.99);
+  EXPECT_EQ(element(circuit, "w1").initially_on, true);
+  EXPECT_EQ(element(circuit, "w1").controls, (std::vector<std::string>{"v1"}));
+  ASSERT_EQ(circuit.initial_conditions.size(), 2u);
+  EXPECT_EQ(circuit.initial_conditions[0].node, "a");
+  EXPECT_EQ(circuit.initial_conditions[0].value, 1.0);
+  EXPECT_EQ(circuit.initial_conditions[1].reference, "0");
+  ASSERT_EQ(circuit.nodesets.size(), 1u);
+  EXPECT_EQ(circuit.nodesets[0].value, 0.5);
+  // .print tran v(a) v(b) i(v1) and .probe v(c): the analysis word is not an output.
+  ASSERT_EQ(circuit.saves.size(), 4u);
+  EXPECT_EQ(circuit.saves[2].kind, netlist::OutputRequest::Kind::branch_current);
+  EXPECT_EQ(circuit.saves[2].element, "v1");
+  EXPECT_EQ(circuit.saves[3].node, "c");
+  EXPECT_EQ(circuit.temperature, 50.0);
+}
+
+TEST(Elaborate, SwitchedBuck) {
+  FlatCircuit circuit = load_data("buck.cir");
+  EXPECT_EQ(circuit.title, "Buck converter with an ideal switch and diode");
+  // ton = duty / fsw = 0.4 / 100k = 4us, period = 10us.
+  const auto& gate = *element(circuit, "vgate").source.waveform;
+  EXPECT_DOUBLE_EQ(gate.args[5], 4e-6);
+  EXPECT_DOUBLE_EQ(gate.args[6], 1e-5);
+  EXPECT_EQ(element(circuit, "vin").source.dc, 12.0);
+  const auto& s1 = element(circuit, "s1");
+  EXPECT_EQ(s1.nodes, (std::vector<std::string>{"in", "sw", "g", "0"}));
+  EXPECT_EQ(s1.model, "swmod");
+  EXPECT_EQ(s1.initially_on, false);
+  EXPECT_EQ(element(circuit, "rload").value, 2.5);
+  const netlist::FlatModel* diode = circuit.find_model("dideal");
+  ASSERT_NE(diode, nullptr);
+  EXPECT_EQ(diode->get("ideal"), 1.0);
+  EXPECT_EQ(diode->get("vfwd"), 0.3);
+  EXPECT_EQ(circuit.find_model("swmod")->get("roff"), 1e6);
+  ASSERT_TRUE(circuit.tran);
+  EXPECT_EQ(circuit.tran->step, 1e-6);
+  EXPECT_EQ(circuit.tran->stop, 2e-3);
+  EXPECT_EQ(circuit.tran->start, 0.0);
+  EXPECT_EQ(circuit.tran->max_step, 100e-9);
+  EXPECT_TRUE(circuit.tran->use_initial_conditions);
+  EXPECT_EQ(circuit.find_option("reltol")->number, 1e-4);
+  EXPECT_EQ(circuit.find_option("method")->word, "gear");
+  EXPECT_EQ(circuit.find_option("nosuch"), nullptr);
+}
+
+TEST(Elaborate, OptionsAreKeptWhateverTheirName) {
+  FlatCircuit circuit = elaborate_text("t\n.options padsim_order=3 noinit\n.option method=trap\n"
+                                       ".options padsim_order=4\n");
+  EXPECT_EQ(circuit.find_option("padsim_order")->number, 4.0);
+  EXPECT_FALSE(circuit.find_option("noinit")->number);
+  EXPECT_EQ(circuit.find_option("method")->word, "trap");
+  EXPECT_EQ(circuit.options.size(), 4u);
+}
+
+TEST(Elaborate, IncludesAndLibrarySectionsRelativeToTheIncludingFile) {
+  FlatCircuit circuit = load_data("include_main.cir");
+  EXPECT_EQ(element(circuit, "x1.r1").value, 1000.0);  // rleaf from ../leaf.inc
+  EXPECT_EQ(element(circuit, "d1").model, "dfast");
+  EXPECT_EQ(circuit.find_model("dfast")->get("is"), 1e-12);
+  EXPECT_EQ(circuit.find_model("dslow"), nullptr);  // the other section is not read
+}
+
+TEST(Elaborate, CommentsContinuationsAndCase) {
+  FlatCircuit circuit = load_data("comments.cir");
+  EXPECT_EQ(element(circuit, "r1").nodes, (std::vector<std::string>{"in", "out"}));
+  EXPECT_EQ(element(circuit, "r2").value, 2000.0);
+  EXPECT_EQ(element(circuit, "c1").value, 1e-6);
+  EXPECT_EQ(element(circuit, "c1").initial_condition, 0.5);
+  EXPECT_EQ(element(circuit, "v1").nodes, (std::vector<std::string>{"in", "0"}));
+  EXPECT_EQ(element(circuit, "v1").source.dc, 5.0);
+  EXPECT_EQ(circuit.elements.size(), 4u);  // nothing after .end
+  ASSERT_EQ(circuit.warnings.size(), 1u);  // the note about .control
+  EXPECT_EQ(circuit.warnings[0].severity, netlist::Severity::note);
+}
+
+TEST(Elaborate, BehavioralExpressionsKeepConditions) {
+  FlatCircuit circuit = load_data("expressions.cir");
+  const auto& b1 = element(circuit, "b1");
+  EXPECT_EQ(netlist::print(*b1.expression),
+            "((v(in) > 0.5) ? (2 * v(in,0)) : ((-(i(v1) ^ 2)) + time))");
+  const auto& b2 = element(circuit, "b2");
+  EXPECT_FALSE(b2.behavioral_is_voltage);
+  EXPECT_EQ(netlist::print(*b2.expression), "(limit(v(in), (-1), 1) * 2)");
+  // fns = 1+0+0+2+2+0+1+0+0; more = 0+0+1+0+1+1+2+4-4; rest = -1+1+0+3+1+2
+  EXPECT_DOUBLE_EQ(element(circuit, "r1").value, 6.0);
+  EXPECT_EQ(element(circuit, "r2").value, 5.0 + 6.0);
+}
+
+}  // namespace

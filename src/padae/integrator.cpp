@@ -34,6 +34,10 @@ constexpr int kMaxNewtonFailures = 10;
 constexpr int kStepsBetweenJacobians = 20;
 constexpr double kJacobianCjChange = 0.25;  // refactor when cj moved by more than this fraction
 constexpr double kEps = std::numeric_limits<double>::epsilon();
+// Zeno behaviour: this many consecutive event intervals, each shrinking by this ratio or more,
+// are taken as events accumulating toward a finite time.
+constexpr int kAccumulationEvents = 12;
+constexpr double kAccumulationRatio = 0.8;
 
 double weighted_max_norm(const Vector& v, const Vector& inverse_weight, int* worst = nullptr) {
   double largest = 0;
@@ -70,6 +74,7 @@ struct Integrator::Impl {
   bool error_test(double& error_k, double& error_k_minus_1, int& order_new);
   void complete_step(double error_k, double error_k_minus_1, int order_new);
   void restore();
+  void shrink_step(double ratio);
   void update_weights();
   double minimum_step() const;
 
@@ -105,7 +110,9 @@ struct Integrator::Impl {
   EventRecord last_event;
   Failure failure{0, "", -1};
   double last_event_time = -std::numeric_limits<double>::infinity();
-  int events_in_burst = 0;
+  double last_event_interval = std::numeric_limits<double>::infinity();
+  int events_in_burst = 0;      // consecutive events within the time resolution
+  int shrinking_intervals = 0;  // consecutive event intervals shrinking geometrically
 
   // BDF history: modified divided differences of x and of q.
   std::array<Vector, kHistory> phi_x, phi_q;
@@ -136,15 +143,16 @@ Integrator::Impl::Impl(System& system_in, Options options_in)
                                                return system_in.absolute_tolerance(
                                                    static_cast<int>(i), options_in.atol);
                                              })),
-      newton(system_in, statistics, absolute_tolerance),
-      reinitializer(system_in, newton, statistics, options_in, absolute_tolerance) {
+      newton(system_in, statistics, absolute_tolerance / options_in.rtol),
+      reinitializer(system_in, newton, statistics, options, absolute_tolerance) {
   options.max_order = std::clamp(options.max_order, 1, kMaxOrder);
   for (auto& v : phi_x) v.setZero(n);
   for (auto& v : phi_q) v.setZero(n);
 }
 
+// Below this a step no longer advances t reliably.
 double Integrator::Impl::minimum_step() const {
-  return std::max(options.min_step, 64 * kEps * std::max(std::abs(t), 1e-6 * options.time_scale));
+  return std::max({options.min_step, 16 * kEps * std::abs(t), 1e-24 * options.time_scale});
 }
 
 void Integrator::Impl::update_weights() {
@@ -195,6 +203,17 @@ void Integrator::Impl::restore() {
   for (int j = constant_steps; j <= order; ++j) {
     phi_x[j] /= beta[j];
     phi_q[j] /= beta[j];
+  }
+}
+
+// A new step size after a failure. In the first step after a (re)start there is no previous
+// step: the history is the initial derivative, rescaled with h (IDA's IDAHandleNFlag, nst == 0).
+void Integrator::Impl::shrink_step(double ratio) {
+  h *= ratio;
+  if (order_used == 0) {
+    psi[0] = h;
+    phi_x[1] *= ratio;
+    phi_q[1] *= ratio;
   }
 }
 
@@ -383,7 +402,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
         if (correction == Correction::singular) worst = newton.singular_column();
         return fail(t, why + " at t = " + format_time(t), worst);
       }
-      h *= 0.25;
+      shrink_step(0.25);
       have_matrix = have_matrix && correction != Correction::singular;
       continue;
     }
@@ -401,10 +420,10 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       order = order_new;
       if (error_test_failures == 1) {
         double ratio = 0.9 * std::pow(2 * error_new + 1e-4, -1.0 / (order + 1));
-        h *= std::clamp(ratio, 0.25, 0.9);
+        shrink_step(std::clamp(ratio, 0.25, 0.9));
       } else {
         if (error_test_failures > 2) order = 1;
-        h *= 0.25;
+        shrink_step(0.25);
       }
       startup_phase = false;
       continue;
@@ -456,17 +475,23 @@ StepOutcome Integrator::Impl::handle_state_event(double t_old, const Vector& gua
   const Vector x_before = interpolate(t_event);
   Predicates target = p;
   for (int k = 0; k < predicate_count; ++k) target[k] = crossing.guards_right[k] > 0;
-
-  // Accumulation: events that follow each other closer than the time resolution.
-  if (t_event - last_event_time <= 100 * minimum_step()) ++events_in_burst;
-  else events_in_burst = 0;
+  // Accumulation (Zeno): events closer than the time resolution, or intervals shrinking
+  // geometrically; the accumulation point is extrapolated from the last two intervals.
+  const double interval = t_event - last_event_time;
+  events_in_burst = interval <= 100 * minimum_step() ? events_in_burst + 1 : 0;
+  shrinking_intervals = interval <= kAccumulationRatio * last_event_interval ? shrinking_intervals + 1 : 0;
+  const double ratio = interval / last_event_interval;
   last_event_time = t_event;
-  if (events_in_burst >= options.max_events_in_burst) {
+  last_event_interval = interval;
+  if (events_in_burst >= options.max_events_in_burst || shrinking_intervals >= kAccumulationEvents) {
+    double limit = shrinking_intervals >= kAccumulationEvents ? t_event + interval * ratio / (1 - ratio) : t_event;
     std::string which;
     for (int k = 0; k < predicate_count; ++k)
       if (target[k] != p[k]) which += (which.empty() ? "" : ", ") + std::to_string(k);
-    return fail(t_event, "event accumulation at t = " + format_time(t_event) + ": " +
-                             std::to_string(events_in_burst) + " events within the time resolution (predicates " + which + ")");
+    t = t_event;
+    x = x_before;
+    return fail(t_event, "event accumulation at t = " + format_time(limit) + ": the intervals between events of predicate " + which +
+                             " shrink to zero (Zeno behaviour); stopped at t = " + format_time(t_event));
   }
 
   t = t_event;
@@ -504,10 +529,11 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     if (system.has_jumps() && target != p) {
       jump_entries.clear();
       system.jump_matrix(t_at, x_jumped, p, jump_entries);
-      for (const JumpEntry& entry : jump_entries)
-        if (target[entry.predicate] != p[entry.predicate])
-          x_jumped[entry.row] += entry.value * (target[entry.predicate] ? 1.0 : -1.0);
-      if (!jump_entries.empty()) last_event.jumped = true;
+      for (const JumpEntry& entry : jump_entries) {
+        if (target[entry.predicate] == p[entry.predicate] || entry.value == 0) continue;
+        x_jumped[entry.row] += entry.value * (target[entry.predicate] ? 1.0 : -1.0);
+        last_event.jumped = true;
+      }
     }
     for (int k = 0; k < predicate_count; ++k) {
       if (target[k] == p[k]) continue;
@@ -539,7 +565,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
   }
   last_event.x_after = consistent->x;
   last_event.impulse = consistent->impulse;
-  if (consistent->impulse.size() > 0 && consistent->impulse.cwiseAbs().maxCoeff() > 0) last_event.jumped = true;
+  last_event.jumped = last_event.jumped || consistent->charges_moved;
   if (last_event.jumped) ++statistics.jumps;
   restart(t_at, *consistent);
   return true;

@@ -31,7 +31,7 @@ struct Options {
   double min_step = 0.0;           // 0: from the time scale and round-off
   double time_scale = 1.0;         // characteristic length of the run (tstop - t0): sets h_min
   int max_event_iterations = 50;   // predicate fixed-point iterations at one event
-  int max_events_in_burst = 1000;  // events closer than min_step to each other before "accumulation"
+  int max_events_in_burst = 100;   // consecutive events within the time resolution: accumulation
 };
 
 struct Statistics {

@@ -180,3 +180,14 @@ void NewtonMatrix::charge_scale(const Vector& scale, Vector& out) const {
 }
 
 }  // namespace padae
+
+namespace padae {
+
+void NewtonMatrix::keep_dynamic_rows(Vector& v) const {
+  Vector ones = Vector::Ones(pattern_.size()), charge;
+  charge_scale(ones, charge);
+  for (int i = 0; i < pattern_.size(); ++i)
+    if (charge[i] == 0) v[i] = 0;
+}
+
+}  // namespace padae

@@ -34,6 +34,8 @@ class NewtonMatrix {
   const Load& load() const { return load_; }
   // |dq/dx| summed into row weights: sum_j |dq_ij/dx_j| * scale_j (zero for algebraic rows).
   void charge_scale(const Vector& scale, Vector& out) const;
+  // Zeroes the entries of v on algebraic rows (no dq/dx at the last derivative evaluation).
+  void keep_dynamic_rows(Vector& v) const;
   int singular_column() const { return lu_.singular_column(); }
   bool is_auxiliary(int unknown) const { return auxiliary_[unknown]; }
   const std::vector<int>& auxiliary_unknowns() const { return auxiliary_list_; }

@@ -8,7 +8,7 @@ namespace padae {
 namespace {
 
 constexpr int kMaxIterations = 40;
-constexpr double kConvergedNorm = 1e-6;     // Newton correction, in tolerance units
+constexpr double kConvergedNorm = 1e-3;     // Newton correction, in tolerance units
 constexpr double kRefactorRate = 0.25;      // refactor when Newton contracts slower than this
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
@@ -58,7 +58,9 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     for (int i : newton_.auxiliary_unknowns()) delta[i] = x[i] - held[i];
     newton_.solve(delta);
     x -= delta;
-    Vector inverse_weight = (options_.rtol * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
+    // The tolerance never asks for less than round-off in x.
+    Vector inverse_weight =
+        ((options_.rtol + 100 * kEps) * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
     double norm = 0;
     int worst = -1;
     for (Eigen::Index i = 0; i < x.size(); ++i) {
@@ -121,7 +123,13 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   if (!backward_euler_with_continuation(t, h_impulse, q_before, p_from, p_to, x_plus))
     return std::nullopt;
   auto consistent = derivatives(t, x_plus, p_to, h_reference);
-  if (consistent) consistent->impulse = h_impulse * x_plus;
+  if (!consistent) return consistent;
+  consistent->impulse = h_impulse * x_plus;
+  for (Eigen::Index i = 0; i < q_before.size(); ++i) {
+    double moved = std::abs(consistent->q[i] - q_before[i]);
+    double scale = std::abs(consistent->q[i]) + std::abs(q_before[i]);
+    if (moved > 1e-10 * scale + std::numeric_limits<double>::min()) consistent->charges_moved = true;
+  }
   return consistent;
 }
 
@@ -139,26 +147,31 @@ std::optional<ConsistentState> Reinitializer::derivatives(double t, const Vector
     return std::nullopt;
   }
   ConsistentState state;
-  state.q = newton_.load().q;
-  // Short enough to be a derivative, long enough that the change in q is far above round-off.
-  const double h_derivative =
-      std::max(1e-8 * h_reference, 1e4 * kEps * std::max(std::abs(t), options_.time_scale));
-  Vector x_heading = x_plus;
-  if (!backward_euler_with_continuation(t + h_derivative, h_derivative, state.q, p, p, x_heading))
+  const Vector q_plus = newton_.load().q;  // a copy: the Newton iterations below reload
+  // Algebraic unknowns may carry impulses in x_plus; their consistent values are those a very
+  // short step reaches (within 1e-8 of a step of t).
+  const double t_floor = std::max(std::abs(t), options_.time_scale);
+  const double h_settle = std::max(1e-8 * h_reference, 1e4 * kEps * t_floor);
+  Vector x_settled = x_plus;
+  if (!backward_euler_with_continuation(t + h_settle, h_settle, q_plus, p, p, x_settled))
     return std::nullopt;
-  if (newton_.evaluate(t + h_derivative, x_heading, p) != EvalStatus::ok) {
-    failure_reason_ = "the model cannot be evaluated just after the event";
-    return std::nullopt;
-  }
-  state.q_derivative = (newton_.load().q - state.q) / h_derivative;
-  // Algebraic unknowns may carry impulses in x_plus; their consistent values are those the
-  // short step reaches.
   state.x = x_plus;
   for (int i = 0; i < system_.size(); ++i)
-    if (system_.kind(i) == UnknownKind::algebraic) state.x[i] = x_heading[i];
-  state.x_derivative = (x_heading - state.x) / h_derivative;
-  state.t_heading = t + h_derivative;
-  state.x_heading = std::move(x_heading);
+    if (system_.kind(i) == UnknownKind::algebraic) state.x[i] = x_settled[i];
+  if (newton_.evaluate(t, state.x, p) != EvalStatus::ok) {
+    failure_reason_ = "the model cannot be evaluated after the event";
+    return std::nullopt;
+  }
+  state.q = newton_.load().q;
+  state.q_derivative = -newton_.load().f;
+  newton_.keep_dynamic_rows(state.q_derivative);
+  // Its truncation error in h x' is about 1e-3 of the first step's own local error.
+  const double h_look = std::max(1e-3 * h_reference, 1e6 * kEps * t_floor);
+  state.x_heading = state.x;
+  if (!backward_euler_with_continuation(t + h_look, h_look, state.q, p, p, state.x_heading))
+    return std::nullopt;
+  state.t_heading = t + h_look;
+  state.x_derivative = (state.x_heading - state.x) / h_look;
   return state;
 }
 

@@ -8,8 +8,11 @@
 // Its impulsive unknowns carry the charge (or flux) that moved, so charge is conserved on every
 // cut-set and flux on every loop, whatever the topology. padae takes the step with h a few
 // ulps of t: below the time resolution, so the state it reaches is the state at t + 0.
-// A second backward-Euler step, short but well above round-off, gives the right derivatives
-// (the BDF restarts at order 1 from them) and where the new motion is heading (convention (9)).
+// A second, very short backward-Euler step settles the algebraic unknowns (impulsive in the
+// first); the right derivative of q is then -f at that consistent state (the BDF restarts at
+// order 1 from it). A third, longer look-ahead step shows where the new motion is heading
+// (convention (9) applied to the new mode): long enough for the motion to be resolved above
+// round-off, short against the step size.
 // When Newton fails on the new mode, the paper's continuation in a parameter blends the
 // residuals of the old and the new mode.
 #pragma once
@@ -25,9 +28,10 @@ namespace padae {
 struct ConsistentState {
   Vector x;             // consistent state at t + 0
   Vector q;             // q(x)
-  Vector x_derivative;  // right derivatives at t (zero for algebraic unknowns)
-  Vector q_derivative;
+  Vector q_derivative;  // right derivative of q at t
+  Vector x_derivative;  // right derivative of x, from the look-ahead (for prediction only)
   Vector impulse;       // integral of each unknown over the jump (empty without a jump)
+  bool charges_moved = false;  // q changed at the jump beyond round-off
   double t_heading = 0; // a point just after t on the new motion
   Vector x_heading;
 };

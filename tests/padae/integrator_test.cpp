@@ -1,0 +1,283 @@
+#include "padae/integrator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "padae/newton_matrix.hpp"
+#include "padae/semi_explicit.hpp"
+#include "padae/steady_state.hpp"
+#include "run_until.hpp"
+
+namespace padae {
+namespace {
+
+using testing::run_until;
+constexpr auto D = UnknownKind::differential;
+constexpr auto A = UnknownKind::algebraic;
+
+// x' = -lambda x: the plainest check of order, step control and accuracy.
+class Decay : public SemiExplicitSystem {
+ public:
+  explicit Decay(double lambda) : SemiExplicitSystem({D}), lambda_(lambda) {}
+  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = -lambda_ * z[0];
+    return EvalStatus::ok;
+  }
+
+ private:
+  double lambda_;
+};
+
+TEST(Integrator, DecayIsAccurateToTheToleranceAndConvergesAsItTightens) {
+  double previous_error = 1;
+  for (double rtol : {1e-4, 1e-6, 1e-8, 1e-10}) {
+    Decay decay(3.0);
+    Options options;
+    options.rtol = rtol;
+    options.atol = rtol * 1e-3;
+    Integrator integrator(decay, options);
+    ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+    ASSERT_TRUE(run_until(integrator, 2.0));
+    double error = std::abs(integrator.state()[0] - std::exp(-6.0)) / std::exp(-6.0);
+    EXPECT_LT(error, 100 * rtol) << "rtol " << rtol;
+    EXPECT_LT(error, previous_error);
+    previous_error = error;
+    EXPECT_EQ(integrator.time(), 2.0);  // t_stop is hit exactly
+  }
+}
+
+// x'' = -x as a first-order system: the step-size and order controller must reach high order.
+class Oscillator : public SemiExplicitSystem {
+ public:
+  Oscillator() : SemiExplicitSystem({D, D}) {}
+  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = z[1];
+    out[1] = -z[0];
+    return EvalStatus::ok;
+  }
+  bool has_equation_jacobian() const override { return true; }
+  bool equation_jacobian(double, const Vector&, const Predicates&, std::vector<double>& values) override {
+    values[pattern().index(0, 1)] = 1;
+    values[pattern().index(1, 0)] = -1;
+    return true;
+  }
+};
+
+TEST(Integrator, OscillatorOverTenPeriodsReachesHighOrder) {
+  Oscillator oscillator;
+  Options options;
+  options.rtol = 1e-8;
+  options.atol = 1e-10;
+  Integrator integrator(oscillator, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Unit(2, 0))) << integrator.failure().reason;
+  int highest_order = 0;
+  const double t_end = 20 * std::numbers::pi;
+  ASSERT_TRUE(run_until(integrator, t_end, [&](const StepOutcome&) {
+    highest_order = std::max(highest_order, integrator.order());
+  }));
+  EXPECT_NEAR(integrator.state()[0], 1.0, 1e-5);
+  EXPECT_NEAR(integrator.state()[1], 0.0, 1e-5);
+  EXPECT_GE(highest_order, 4);
+  EXPECT_LT(integrator.statistics().steps, 3000);
+}
+
+TEST(Integrator, DenseOutputInterpolatesWithinTheStep) {
+  Oscillator oscillator;
+  Options options;
+  options.rtol = 1e-9;
+  options.atol = 1e-11;
+  Integrator integrator(oscillator, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Unit(2, 0))) << integrator.failure().reason;
+  double worst = 0;
+  ASSERT_TRUE(run_until(integrator, 5.0, [&](const StepOutcome&) {
+    double t_mid = integrator.time() - 0.5 * integrator.step_size();
+    worst = std::max(worst, std::abs(integrator.interpolate(t_mid)[0] - std::cos(t_mid)));
+  }));
+  EXPECT_LT(worst, 1e-6);
+}
+
+// An index-1 DAE: x' = -y, 0 = y - x^2 (x = 1 / (1 + t)); the algebraic y is not error-tested.
+class IndexOne : public SemiExplicitSystem {
+ public:
+  IndexOne() : SemiExplicitSystem({D, A}) {}
+  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = -z[1];
+    out[1] = z[1] - z[0] * z[0];
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Integrator, IndexOneDaeWithInconsistentInitialAlgebraicValue) {
+  IndexOne dae;
+  Options options;
+  options.rtol = 1e-7;
+  options.atol = 1e-9;
+  Integrator integrator(dae, options);
+  // y0 = 5 is inconsistent: initialization must bring it to x0^2 = 1.
+  ASSERT_TRUE(integrator.initialize(0.0, Vector{{1.0, 5.0}})) << integrator.failure().reason;
+  // Consistent to the short derivative step that re-initialization takes (1e-8 of a step).
+  EXPECT_NEAR(integrator.state()[1], 1.0, 1e-9);
+  ASSERT_TRUE(run_until(integrator, 9.0));
+  EXPECT_NEAR(integrator.state()[0], 0.1, 1e-6);
+  EXPECT_NEAR(integrator.state()[1], 0.01, 1e-7);
+}
+
+// x' = s(t) with a source corner at t = 0.25 (slope 1 before, -2 after): the step must end
+// exactly at the corner and restart there.
+class Corner : public SemiExplicitSystem {
+ public:
+  Corner() : SemiExplicitSystem({D}) {}
+  EvalStatus equations(double t, const Vector&, const Predicates&, Vector& out) override {
+    out[0] = t < 0.25 ? t : 0.25 - 2 * (t - 0.25);
+    return EvalStatus::ok;
+  }
+  double next_time_event(double t) const override {
+    return t < 0.25 ? 0.25 : std::numeric_limits<double>::infinity();
+  }
+};
+
+TEST(Integrator, TimeEventsAreHitExactly) {
+  Corner corner;
+  Options options;
+  options.rtol = 1e-8;
+  options.atol = 1e-12;
+  Integrator integrator(corner, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
+  bool hit = false;
+  ASSERT_TRUE(run_until(integrator, 1.0, [&](const StepOutcome& outcome) {
+    if (outcome.kind == StepKind::time_event) {
+      hit = true;
+      EXPECT_EQ(outcome.t, 0.25);
+      EXPECT_NEAR(integrator.state()[0], 0.25 * 0.25 / 2, 1e-9);
+    }
+  }));
+  EXPECT_TRUE(hit);
+  // x(1) = 1/32 + 0.25*0.75 - 0.75^2 = -0.34375.
+  EXPECT_NEAR(integrator.state()[0], 0.03125 + 0.1875 - 0.5625, 1e-7);
+  EXPECT_EQ(integrator.statistics().time_events, 1);
+}
+
+// x' = -x, x(0) = 1, with a model that is undefined for x < 0 (like a logarithm of a state
+// that is positive on the physical path). A first step that is far too long predicts x < 0:
+// that step is cut, not fatal.
+class PositiveDecay : public SemiExplicitSystem {
+ public:
+  PositiveDecay() : SemiExplicitSystem({D}) {}
+  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
+    if (z[0] < 0) return EvalStatus::outside_domain;
+    out[0] = -z[0];
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Integrator, ModelOutsideItsDomainCutsTheStepAndTheRunSucceeds) {
+  PositiveDecay model;
+  Options options;
+  options.rtol = 1e-6;
+  options.atol = 1e-10;
+  options.initial_step = 3;
+  Integrator integrator(model, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+  ASSERT_TRUE(run_until(integrator, 10.0)) << integrator.failure().reason;
+  EXPECT_NEAR(integrator.state()[0], std::exp(-10.0), 1e-4 * std::exp(-10.0));
+  EXPECT_GT(integrator.statistics().rejected_domain, 0);
+}
+
+// The finite-difference Jacobian (pattern-coloured) agrees with the analytic one.
+class Nonlinear : public System {
+ public:
+  Nonlinear() {
+    std::vector<std::pair<int, int>> entries{{0, 1}, {1, 0}, {1, 2}, {2, 0}, {3, 2}, {2, 3}};
+    pattern_ = Pattern(4, entries);
+  }
+  int size() const override { return 4; }
+  UnknownKind kind(int) const override { return D; }
+  const Pattern& pattern() const override { return pattern_; }
+  bool analytic_jacobian() const override { return analytic; }
+  EvalStatus load(double t, const Vector& x, const Predicates&, Load& out) override {
+    out.f[0] = std::sin(x[1]) + x[0] * t;
+    out.f[1] = x[0] * x[2] + std::exp(x[1]);
+    out.f[2] = x[3] * x[3] - x[0];
+    out.f[3] = std::cos(x[2]) + x[3];
+    out.q[0] = x[0] * x[0] * x[0];
+    out.q[1] = x[1] + 0.5 * x[0];
+    out.q[2] = std::tanh(x[2]);
+    out.q[3] = x[3] * x[2];
+    if (!out.jacobian_requested) return EvalStatus::ok;
+    auto at = [&](int r, int c) -> std::size_t { return static_cast<std::size_t>(pattern_.index(r, c)); };
+    out.df_dx[at(0, 0)] = t;
+    out.df_dx[at(0, 1)] = std::cos(x[1]);
+    out.df_dx[at(1, 0)] = x[2];
+    out.df_dx[at(1, 1)] = std::exp(x[1]);
+    out.df_dx[at(1, 2)] = x[0];
+    out.df_dx[at(2, 3)] = 2 * x[3];
+    out.df_dx[at(2, 0)] = -1;
+    out.df_dx[at(3, 2)] = -std::sin(x[2]);
+    out.df_dx[at(3, 3)] = 1;
+    out.dq_dx[at(0, 0)] = 3 * x[0] * x[0];
+    out.dq_dx[at(1, 1)] = 1;
+    out.dq_dx[at(1, 0)] = 0.5;
+    out.dq_dx[at(2, 2)] = 1 - std::pow(std::tanh(x[2]), 2);
+    out.dq_dx[at(3, 3)] = x[2];
+    out.dq_dx[at(3, 2)] = x[3];
+    return EvalStatus::ok;
+  }
+  bool analytic = true;
+
+ private:
+  Pattern pattern_;
+};
+
+TEST(NewtonMatrix, FiniteDifferencesAgreeWithTheAnalyticJacobian) {
+  Nonlinear model;
+  Statistics statistics;
+  Vector typical = Vector::Constant(4, 1e-6);
+  const Vector x{{0.7, -0.3, 1.1, 0.4}};
+  const double cj = 3.0;
+  std::vector<double> analytic_f, analytic_q;
+  {
+    NewtonMatrix analytic(model, statistics, typical);
+    ASSERT_EQ(analytic.factor(0.5, x, {}, cj), NewtonMatrix::Outcome::ok);
+    analytic_f = analytic.load().df_dx;
+    analytic_q = analytic.load().dq_dx;
+  }
+  model.analytic = false;
+  NewtonMatrix numeric(model, statistics, typical);
+  ASSERT_EQ(numeric.factor(0.5, x, {}, cj), NewtonMatrix::Outcome::ok);
+  for (std::size_t k = 0; k < analytic_f.size(); ++k) {
+    EXPECT_NEAR(numeric.load().df_dx[k], analytic_f[k], 1e-6 * (1 + std::abs(analytic_f[k])));
+    EXPECT_NEAR(numeric.load().dq_dx[k], analytic_q[k], 1e-6 * (1 + std::abs(analytic_q[k])));
+  }
+}
+
+// A resistor from 1 V into a diode: (x - 1) / R + Is (exp(x / Vt) - 1) = 0.
+class DiodeBias : public SemiExplicitSystem {
+ public:
+  DiodeBias() : SemiExplicitSystem({A}) {}
+  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = current(z[0]);
+    return EvalStatus::ok;
+  }
+  static double current(double v) { return (v - 1.0) / 1e3 + 1e-14 * (std::exp(v / 0.025) - 1); }
+};
+
+TEST(SteadyState, SolvesANonlinearBiasPoint) {
+  DiodeBias bias;
+  Options options;
+  options.rtol = 1e-9;
+  options.atol = 1e-12;
+  SteadyState result = steady_state(bias, 0.0, Vector::Zero(1), {}, options);
+  ASSERT_TRUE(result.converged) << result.message;
+  // Reference by bisection (the current is increasing in v).
+  double low = 0, high = 1;
+  for (int i = 0; i < 200; ++i) {
+    double middle = 0.5 * (low + high);
+    (DiodeBias::current(middle) > 0 ? high : low) = middle;
+  }
+  EXPECT_NEAR(result.x[0], 0.5 * (low + high), 1e-9);
+}
+
+}  // namespace
+}  // namespace padae

@@ -548,6 +548,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
                         reinitializer.failure_unknown()};
       return false;
     }
+    if (predicate_count == 0) break;
     // Convention (9) for the new mode: a predicate that flipped here is judged where the new
     // motion is heading (just after t); the others on the state right after the jump.
     Vector guards_after(predicate_count), guards_heading(predicate_count);

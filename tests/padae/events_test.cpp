@@ -1,0 +1,190 @@
+// Event handling corner cases: an event at t0, inside the first step, simultaneous events, a
+// jump that flips a further predicate, and chattering that must be diagnosed, not looped on.
+#include <gtest/gtest.h>
+
+#include "padae/integrator.hpp"
+#include "padae/semi_explicit.hpp"
+#include "run_until.hpp"
+
+namespace padae {
+namespace {
+
+using testing::run_until;
+constexpr auto D = UnknownKind::differential;
+constexpr auto X = UnknownKind::auxiliary;
+
+// x' = (p | 2 | 1), p = (x > 0): the slope doubles when x crosses zero upward.
+class SlopeChange : public SemiExplicitSystem {
+ public:
+  SlopeChange() : SemiExplicitSystem({D}) {}
+  EvalStatus equations(double, const Vector&, const Predicates& p, Vector& out) override {
+    out[0] = p[0] ? 2.0 : 1.0;
+    return EvalStatus::ok;
+  }
+  int predicate_count() const override { return 1; }
+  EvalStatus guards(double, const Vector& z, Vector& out) const override {
+    out[0] = z[0];
+    return EvalStatus::ok;
+  }
+};
+
+Options precise() {
+  Options options;
+  options.rtol = 1e-9;
+  options.atol = 1e-12;
+  return options;
+}
+
+TEST(Events, AnEventAtTheInitialTime) {
+  // x(0) = 0 sits on the switching surface and the motion leaves it upward at once: the
+  // predicate is true from t0 + 0 (settled while initializing, or as an event at t0).
+  SlopeChange model;
+  Integrator integrator(model, precise());
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
+  ASSERT_TRUE(run_until(integrator, 1.0, [&](const StepOutcome& outcome) {
+    if (outcome.kind == StepKind::event) EXPECT_LT(outcome.t, 1e-12);
+  })) << integrator.failure().reason;
+  EXPECT_EQ(integrator.predicates()[0], 1);
+  EXPECT_NEAR(integrator.state()[0], 2.0, 1e-9);
+}
+
+TEST(Events, AnEventInsideTheFirstStep) {
+  SlopeChange model;
+  Options options = precise();
+  options.initial_step = 0.1;
+  Integrator integrator(model, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, -1e-6))) << integrator.failure().reason;
+  std::vector<double> event_times;
+  ASSERT_TRUE(run_until(integrator, 1.0, [&](const StepOutcome& outcome) {
+    if (outcome.kind == StepKind::event) event_times.push_back(outcome.t);
+  })) << integrator.failure().reason;
+  ASSERT_EQ(event_times.size(), 1u);
+  EXPECT_NEAR(event_times[0], 1e-6, 100 * 2.2e-16 * 0.1);  // 100 ulp of the step
+  EXPECT_NEAR(integrator.state()[0], 2 * (1 - 1e-6), 1e-9);
+}
+
+// x' = 1 with p1 = (x > 0.5) and p2 = (t > 0.5): both change at t = 0.5, in one event.
+class TwoAtOnce : public SemiExplicitSystem {
+ public:
+  TwoAtOnce() : SemiExplicitSystem({D}) {}
+  EvalStatus equations(double, const Vector&, const Predicates&, Vector& out) override {
+    out[0] = 1;
+    return EvalStatus::ok;
+  }
+  int predicate_count() const override { return 2; }
+  EvalStatus guards(double t, const Vector& z, Vector& out) const override {
+    out[0] = z[0] - 0.5;
+    out[1] = t - 0.5;
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Events, SimultaneousEventsAreOneEvent) {
+  TwoAtOnce model;
+  Integrator integrator(model, precise());
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
+  std::vector<EventRecord> events;
+  ASSERT_TRUE(run_until(integrator, 1.0, [&](const StepOutcome& outcome) {
+    if (outcome.kind == StepKind::event) events.push_back(integrator.last_event());
+  }));
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_NEAR(events[0].t, 0.5, 1e-14);
+  EXPECT_EQ(events[0].flips.size(), 2u);
+  EXPECT_EQ(integrator.predicates(), (Predicates{1, 1}));
+}
+
+// x' = 1; p1 = (x > 1) makes the auxiliary y jump to 1; p2 = (y > 0.5) then holds too: the jump
+// flips a further predicate, settled by the fixed point within the same event.
+class Cascade : public SemiExplicitSystem {
+ public:
+  Cascade() : SemiExplicitSystem({D, X}) {}
+  EvalStatus equations(double, const Vector&, const Predicates&, Vector& out) override {
+    out[0] = 1;
+    return EvalStatus::ok;
+  }
+  int predicate_count() const override { return 2; }
+  EvalStatus guards(double, const Vector& z, Vector& out) const override {
+    out[0] = z[0] - 1;
+    out[1] = z[1] - 0.5;
+    return EvalStatus::ok;
+  }
+  bool has_jumps() const override { return true; }
+  void jump_matrix(double, const Vector&, const Predicates&, std::vector<JumpEntry>& out) const override {
+    out.push_back({1, 0, 1.0});
+  }
+};
+
+TEST(Events, AJumpThatFlipsAFurtherPredicateSettlesInOneEvent) {
+  Cascade model;
+  Integrator integrator(model, precise());
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(2))) << integrator.failure().reason;
+  std::vector<EventRecord> events;
+  ASSERT_TRUE(run_until(integrator, 2.0, [&](const StepOutcome& outcome) {
+    if (outcome.kind == StepKind::event) events.push_back(integrator.last_event());
+  }));
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_NEAR(events[0].t, 1.0, 1e-12);
+  ASSERT_EQ(events[0].flips.size(), 2u);
+  EXPECT_EQ(events[0].flips[0].predicate, 0);
+  EXPECT_EQ(events[0].flips[1].predicate, 1);
+  EXPECT_EQ(events[0].iterations, 2);
+  EXPECT_EQ(integrator.state()[1], 1.0);
+  EXPECT_NEAR(integrator.state()[0], 2.0, 1e-9);
+}
+
+// An ideal relay without hysteresis: x' = (p | -1 | 1), p = (x > 0). At x = 0 both modes point
+// back across the switching surface (a sliding mode): the run must stop with a diagnostic.
+class Relay : public SemiExplicitSystem {
+ public:
+  Relay() : SemiExplicitSystem({D}) {}
+  EvalStatus equations(double, const Vector&, const Predicates& p, Vector& out) override {
+    out[0] = p[0] ? -1.0 : 1.0;
+    return EvalStatus::ok;
+  }
+  int predicate_count() const override { return 1; }
+  EvalStatus guards(double, const Vector& z, Vector& out) const override {
+    out[0] = z[0];
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Events, ChatteringIsDiagnosedWithTimeAndPredicate) {
+  Relay model;
+  Integrator integrator(model, precise());
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, -1.0))) << integrator.failure().reason;
+  EXPECT_FALSE(run_until(integrator, 3.0));
+  EXPECT_NEAR(integrator.failure().t, 1.0, 1e-9);
+  EXPECT_NE(integrator.failure().reason.find("chattering"), std::string::npos) << integrator.failure().reason;
+  EXPECT_NE(integrator.failure().reason.find("predicates 0"), std::string::npos) << integrator.failure().reason;
+}
+
+// Without predicates no guard is ever evaluated; without jumps no jump matrix is asked for.
+class Counting : public SemiExplicitSystem {
+ public:
+  Counting() : SemiExplicitSystem({D}) {}
+  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = -z[0];
+    return EvalStatus::ok;
+  }
+  EvalStatus guards(double, const Vector&, Vector&) const override {
+    ++guard_calls;
+    return EvalStatus::ok;
+  }
+  void jump_matrix(double, const Vector&, const Predicates&, std::vector<JumpEntry>&) const override {
+    ++jump_calls;
+  }
+  mutable int guard_calls = 0, jump_calls = 0;
+};
+
+TEST(Events, ACircuitPaysOnlyForWhatItUses) {
+  Counting model;
+  Integrator integrator(model, precise());
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0)));
+  ASSERT_TRUE(run_until(integrator, 5.0));
+  EXPECT_EQ(model.guard_calls, 0);
+  EXPECT_EQ(model.jump_calls, 0);
+  EXPECT_EQ(integrator.statistics().events, 0);
+}
+
+}  // namespace
+}  // namespace padae

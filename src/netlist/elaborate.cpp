@@ -24,6 +24,8 @@ namespace netlist {
 namespace {
 
 constexpr int max_subcircuit_depth = 100;
+// Subcircuits instantiating subcircuits multiply: a few lines can ask for 10^10 elements.
+constexpr std::size_t max_flat_elements = 10'000'000;
 
 bool is_one_of(const std::string& name, std::initializer_list<const char*> names) {
   for (const char* candidate : names)
@@ -622,6 +624,13 @@ class Elaborator {
                          "subcircuit '" + card.subcircuit.text + "' is not defined");
       return;
     }
+    if (circuit_.elements.size() >= max_flat_elements) {
+      if (!too_large_reported_)
+        diagnostics_.error(card.name.where, "the circuit expands to more than " +
+                                                std::to_string(max_flat_elements) + " elements");
+      too_large_reported_ = true;
+      return;
+    }
     const auto& chain = instance.subcircuit_chain;
     if (std::find(chain.begin(), chain.end(), subcircuit->name.text) != chain.end() ||
         chain.size() >= max_subcircuit_depth) {
@@ -810,6 +819,7 @@ class Elaborator {
   Diagnostics& diagnostics_;
   FlatCircuit circuit_;
   bool has_tran_ = false;
+  bool too_large_reported_ = false;
   std::unordered_map<std::string, std::size_t> element_index_;
   std::vector<ControlUse> control_uses_;
   std::vector<std::pair<std::string, SourceRange>> branch_current_uses_;

@@ -42,6 +42,10 @@ class CardContext {
   void expected(Iterator where, const std::string& what) const;
 
   Iterator begin() const { return line_.text.begin(); }
+
+  // Nesting depth of the expression being parsed: bounded so that the recursive descent
+  // cannot exhaust the stack ("((((..." or "- - - -...").
+  int nesting = 0;
   Iterator end() const { return line_.text.end(); }
 
  private:

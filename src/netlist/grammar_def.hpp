@@ -247,6 +247,42 @@ inline auto const make_option = [](auto& context) {
   _val(context) = std::move(item);
 };
 
+// ---- nesting limit --------------------------------------------------------------------------
+
+inline constexpr int max_expression_nesting = 200;
+
+// nested[p]: p, counted as one level of expression nesting.
+template <typename Subject>
+struct nested_directive : x3::unary_parser<Subject, nested_directive<Subject>> {
+  using base_type = x3::unary_parser<Subject, nested_directive<Subject>>;
+  static bool const handles_container = Subject::handles_container;
+  explicit nested_directive(Subject const& subject) : base_type(subject) {}
+
+  template <typename It, typename Context, typename RContext, typename Attribute>
+  bool parse(It& first, It const& last, Context const& context, RContext& rcontext,
+             Attribute& attribute) const {
+    CardContext& card = card_of(context);
+    if (card.nesting >= max_expression_nesting)
+      throw CardError{card.token_range(first), "expression nested too deeply"};
+    ++card.nesting;
+    struct Leave {
+      CardContext& card;
+      ~Leave() { --card.nesting; }
+    } leave{card};
+    return this->subject.parse(first, last, context, rcontext, attribute);
+  }
+};
+
+struct nested_gen {
+  template <typename Subject>
+  nested_directive<typename x3::extension::as_parser<Subject>::value_type> operator[](
+      Subject const& subject) const {
+    return nested_directive<typename x3::extension::as_parser<Subject>::value_type>{
+        x3::as_parser(subject)};
+  }
+};
+inline nested_gen const nested{};
+
 // ---- rules --------------------------------------------------------------------------------
 // A rule's name is what an error says was expected: "expected a node name".
 
@@ -333,7 +369,7 @@ x3::rule<class voltage_open_id, TokenRange> const voltage_open = "v(";
 x3::rule<class current_open_id, TokenRange> const current_open = "i(";
 
 auto const expression_def =
-    logical_or[assign] >> -(('?' > expression > ':' > expression)[make_conditional]);
+    nested[logical_or[assign] >> -(('?' > expression > ':' > expression)[make_conditional])];
 auto const logical_or_def =
     logical_and[assign] >> *((lit("||") > logical_and)[make_binary<BinaryOperator::logical_or>]);
 auto const logical_and_def =
@@ -356,9 +392,9 @@ auto const minus_token_def = x3::raw[lit('-')];
 auto const not_token_def = x3::raw[lit('!')];
 auto const voltage_open_def = x3::raw[lexeme[no_case[lit('v')] >> '(']];
 auto const current_open_def = x3::raw[lexeme[no_case[lit('i')] >> '(']];
-auto const unary_def = (minus_token > unary)[make_unary<UnaryOperator::negate>] |
-                       (not_token > unary)[make_unary<UnaryOperator::logical_not>] |
-                       (lit('+') > unary)[assign] | power[assign];
+auto const unary_def = nested[(minus_token > unary)[make_unary<UnaryOperator::negate>] |
+                              (not_token > unary)[make_unary<UnaryOperator::logical_not>] |
+                              (lit('+') > unary)[assign] | power[assign]];
 auto const power_def =
     primary[assign] >> -(((lit("**") | lit('^')) > unary)[make_binary<BinaryOperator::power>]);
 auto const primary_def = unsigned_number[assign] | (lit('(') > expression > closing_paren)[assign] |

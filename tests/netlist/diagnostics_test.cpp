@@ -136,6 +136,22 @@ TEST(Diagnostics, SeveralErrorsInOnePass) {
   EXPECT_EQ(lines, (std::vector<int>{2, 3, 5, 6}));
 }
 
+TEST(Diagnostics, DeepNestingIsAnErrorNotAStackOverflow) {
+  // 100 parentheses reach the nesting limit of 200 (an expression and a unary level each); the
+  // 101st '(' is at column 8 + 101.
+  netlist::Diagnostics parens;
+  first_error("t\nR1 a b {" + std::string(300, '(') + "1" + std::string(300, ')') + "}\n", parens);
+  ASSERT_EQ(parens.error_count(), 1);
+  EXPECT_EQ(parens.all()[0].message, "expression nested too deeply");
+  EXPECT_EQ(parens.all()[0].where.begin.column, 109);
+  // Each '-' is a unary level below the expression's: the 200th '-' (column 208) is too deep.
+  netlist::Diagnostics minuses;
+  first_error("t\nR1 a b {" + std::string(300, '-') + "1}\n", minuses);
+  ASSERT_EQ(minuses.error_count(), 1);
+  EXPECT_EQ(minuses.all()[0].message, "expression nested too deeply");
+  EXPECT_EQ(minuses.all()[0].where.begin.column, 208);
+}
+
 TEST(Diagnostics, IncludeCycleIsDetected) {
   netlist::Diagnostics diagnostics;
   std::string path = std::string(NETLIST_TEST_DATA) + "/invalid/cycle_a.cir";

@@ -97,7 +97,8 @@ void check_structure(const Model& model, StartKind start) {
   for (int root = 0; root <= n; ++root) {
     if (floating[root].empty()) continue;
     std::vector<std::string> nodes, cut;
-    for (int i : floating[root]) nodes.push_back(unknowns.owner(i));
+    for (int i : floating[root])
+      nodes.push_back(unknowns.category(i) == UnknownCategory::node_voltage ? unknowns.owner(i) : unknowns.label(i));
     for (const Edge& e : edges) {
       const bool crosses = (paths.find(e.a) == root) != (paths.find(e.b) == root);
       if (crosses && std::find(cut.begin(), cut.end(), e.element) == cut.end()) cut.push_back(e.element);

@@ -73,7 +73,8 @@ class Diode final : public Device {
     if (charged) e.dq(junction_slots_, capacitance);
   }
   void edges(std::vector<Edge>& out) const override {
-    out.push_back({anode_, cathode_, Connection::conductive, name()});
+    out.push_back({junction_, cathode_, Connection::conductive, name()});
+    if (series_resistance_ > 0) out.push_back({anode_, junction_, Connection::conductive, name()});
   }
 
   // Junction current without GMIN and its derivative (ngspice dioload.c: forward exponential,

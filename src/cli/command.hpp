@@ -1,0 +1,29 @@
+// The padsim command without its argument parsing (main.cpp): load the netlist, build the
+// model, check it, start, integrate step by step, stream the waveform.
+#pragma once
+
+#include <optional>
+#include <string>
+
+namespace padsim {
+
+struct CommandOptions {
+  std::string netlist;
+  std::string output = "-";   // CSV; "-" is standard output
+  std::string probes;         // "v(out),i(l1)"; empty: .save/.print, else the default columns
+  std::optional<double> rtol, atol, tstop;
+  bool stats = false;
+  std::string events;         // event log CSV
+  std::string raw;            // ngspice raw file
+  bool raw_ascii = false;
+  std::string plot;           // PNG
+  bool quiet = false;
+};
+
+// Exit codes of the command.
+enum ExitCode { success = 0, simulation_failure = 1, bad_input = 2 };
+
+// Runs the command; messages go to stderr. Returns the exit code.
+int run_command(const CommandOptions& options);
+
+}  // namespace padsim

@@ -1,0 +1,32 @@
+// padsim NETLIST [-o OUT.csv] [--probe "v(out),i(l1)"] [--rtol R] [--atol A] [--tstop T] [--stats]
+//                [--events FILE] [--raw OUT.raw] [--ascii] [--plot OUT.png] [--quiet]
+// The only translation unit that includes CLI11 (slow to compile).
+#include <CLI/CLI.hpp>
+
+#include "cli/command.hpp"
+
+int main(int argc, char** argv) {
+  padsim::CommandOptions options;
+  CLI::App app{"padsim: transient simulation of switched circuits with exact events and jumps"};
+  app.add_option("netlist", options.netlist, "SPICE netlist with a .tran card")->required();
+  app.add_option("-o,--output", options.output, "waveform CSV (default: standard output)");
+  app.add_option("--probe", options.probes, "columns, e.g. \"v(out),v(a,b),i(l1)\" (default: .save/.print, else all node voltages and V and L currents)");
+  app.add_option("--rtol", options.rtol, "relative tolerance (overrides .options reltol)")->check(CLI::PositiveNumber);
+  app.add_option("--atol", options.atol, "absolute tolerance of every unknown (overrides .options abstol and vntol)")->check(CLI::PositiveNumber);
+  app.add_option("--tstop", options.tstop, "stop time (overrides .tran)")->check(CLI::PositiveNumber);
+  app.add_flag("--stats", options.stats, "print run statistics as one JSON object on stderr");
+  app.add_option("--events", options.events, "CSV of every event: time, element, predicate, from, to, jump energy");
+  app.add_option("--raw", options.raw, "ngspice raw file (binary)");
+  app.add_flag("--ascii", options.raw_ascii, "write the raw file in ascii");
+  app.add_option("--plot", options.plot, "PNG of the probed signals (gnuplot)");
+  app.add_flag("-q,--quiet", options.quiet, "no warnings, no progress line");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return padsim::bad_input;
+  }
+  return padsim::run_command(options);
+}

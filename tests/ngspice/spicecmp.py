@@ -4,12 +4,14 @@ Pieces, each unit-tested in test_spicecmp.py:
   - netlist reading: the .tran card (engineering suffixes, continuation lines);
   - ngspice batch runs: a generated control deck (wrdata with one time column), failure
     detection (ngspice exits 0 after "Timestep too small": the last time point must reach tstop);
-  - padsim runs: `padsim NETLIST -o out.csv --probe P ...`, CSV read back;
+  - padsim runs: `padsim NETLIST -o out.csv --probe "P1,P2"`, CSV read back;
   - comparison: linear interpolation onto the reference's time points, max and RMS absolute
     difference divided by the reference signal's range, per probe; threshold-crossing instants
     (linear interpolation between the points on both sides) compared separately.
 """
 
+import csv
+import io
 import math
 import os
 import re
@@ -147,7 +149,9 @@ def replace_tran(text, tran):
 
 
 # Settings of ngspice's "tight" run, the reference that measures ngspice's own error floor.
-TIGHT_OPTIONS = "reltol=1e-7 abstol=1e-15 vntol=1e-10 chgtol=1e-18 trtol=1 method=gear"
+# Newton tolerances follow reltol down (vntol 1e-9 V, abstol 1e-14 A) so that reltol governs;
+# gear, because trapezoidal rings after a switch. The maximum step is set per case (run_regression).
+TIGHT_OPTIONS = "reltol=1e-7 abstol=1e-14 vntol=1e-9 method=gear"
 
 
 def ngspice_deck(netlist_text, probes, data_path, options="", max_step=None, accounting=True):
@@ -243,24 +247,27 @@ def run_ngspice(netlist_path, probes, workdir, options="", max_step=None, ngspic
 # padsim
 
 def read_csv(path):
-    """padsim's CSV: header "time,<probes>", then numbers. Returns (names, columns)."""
-    with open(path) as f:
-        header = [h.strip().strip('"').lower() for h in f.readline().strip().split(",")]
-        columns = [[] for _ in header]
-        for line in f:
-            fields = line.strip().split(",")
-            if len(fields) != len(header):
-                continue
-            for c, field in enumerate(fields):
-                columns[c].append(float(field))
+    """padsim's CSV: header "time,<probes>" (quoted names allowed), then numbers.
+    Returns (names in lower case, columns). A last line without its newline (a killed run) is
+    ignored."""
+    with open(path, newline="") as f:
+        text = f.read()
+    if not text.endswith("\n"):
+        text = text[:text.rfind("\n") + 1]
+    rows = csv.reader(io.StringIO(text))
+    header = [h.strip().lower().replace(" ", "") for h in next(rows)]
+    columns = [[] for _ in header]
+    for fields in rows:
+        if len(fields) != len(header):
+            continue
+        for c, field in enumerate(fields):
+            columns[c].append(float(field))
     return header, columns
 
 
 def padsim_command(padsim, netlist, csv_path, probes, extra=()):
-    cmd = [padsim, netlist, "-o", csv_path]
-    for p in probes:
-        cmd += ["--probe", p]
-    return cmd + list(extra)
+    """padsim NETLIST -o CSV --probe "p1,p2,..." [extra...] (the probe list is one argument)."""
+    return [padsim, netlist, "-o", csv_path, "--probe", ",".join(probes)] + list(extra)
 
 
 def run_padsim(padsim, netlist_path, probes, workdir, extra=(), timeout=600):
@@ -322,31 +329,37 @@ def interpolate(t_src, y_src, t_query):
     return out
 
 
-def crossings(t, y, threshold, hysteresis=0.0):
-    """Threshold crossings as (time, direction) with direction +1 (rising) or -1 (falling).
+def crossing_brackets(t, y, threshold, hysteresis=0.0):
+    """Threshold crossings as (time, direction, t_before, t_after): direction +1 (rising) or -1
+    (falling); time by linear interpolation between the samples on both sides of the threshold,
+    which are at t_before and t_after (equal for a jump recorded as two rows at one time).
 
-    The time is the linear interpolation between the samples on both sides of the threshold.
     With hysteresis h, a crossing counts only once the signal has gone from below threshold - h
-    to above threshold + h (or back), so noise around the threshold gives one crossing; the time
+    to above threshold + h (or back), so ringing around the threshold gives one crossing; the time
     reported is that of the last threshold passage before the band was left."""
     found = []
     state = None  # +1 above the band, -1 below
-    last_pass = None  # (time, direction) of the latest passage through the threshold
+    last_pass = None  # (time, direction, t_before, t_after) of the latest threshold passage
     for k in range(len(t)):
         if k > 0:
             a, b = y[k - 1] - threshold, y[k] - threshold
             if (a < 0 <= b) or (a >= 0 > b):
                 tc = t[k - 1] if b == a else t[k - 1] + (t[k] - t[k - 1]) * (-a / (b - a))
-                last_pass = (tc, 1 if b >= 0 else -1)
+                last_pass = (tc, 1 if b >= 0 else -1, t[k - 1], t[k])
         if y[k] > threshold + hysteresis:
             if state == -1 and last_pass is not None:
-                found.append((last_pass[0], 1))
+                found.append(last_pass[:1] + (1,) + last_pass[2:])
             state = 1
         elif y[k] < threshold - hysteresis:
             if state == 1 and last_pass is not None:
-                found.append((last_pass[0], -1))
+                found.append(last_pass[:1] + (-1,) + last_pass[2:])
             state = -1
     return found
+
+
+def crossings(t, y, threshold, hysteresis=0.0):
+    """Threshold crossings as (time, direction); see crossing_brackets."""
+    return [c[:2] for c in crossing_brackets(t, y, threshold, hysteresis)]
 
 
 def signal_range(y):
@@ -354,13 +367,21 @@ def signal_range(y):
     return r if r > 0 else max(abs(max(y)), 1e-30)
 
 
-def excluded_mask(t, centres, half_width):
-    """True for the times within half_width of any of the sorted centre times."""
+def excluded_mask(t, intervals):
+    """True for the times inside any of the closed intervals (lo, hi)."""
+    intervals = sorted(intervals)
     mask, j = [], 0
     for tk in t:
-        while j < len(centres) and centres[j] < tk - half_width:
+        while j < len(intervals) and intervals[j][1] < tk:
             j += 1
-        mask.append(j < len(centres) and abs(centres[j] - tk) <= half_width)
+        inside = False
+        for lo, hi in intervals[j:j + 4]:  # intervals may overlap: look a few ahead
+            if lo <= tk <= hi:
+                inside = True
+                break
+            if lo > tk:
+                break
+        mask.append(inside)
     return mask
 
 
@@ -381,12 +402,14 @@ def waveform_error(t_ref, y_ref, t_test, y_test, exclude=None):
 
 
 def match_crossings(ref, test):
-    """Pairs each reference crossing with the test crossing of the same direction nearest in time.
-    Returns (max |dt|, list of dt, unmatched reference count, surplus test count)."""
-    dts, used = [], set()
-    for tc, d in ref:
+    """Pairs each reference crossing with the unused test crossing of the same direction nearest
+    in time. Returns (max |dt|, list of (ref index, test index), unmatched reference count,
+    surplus test count)."""
+    pairs, used = [], set()
+    for i, (tc, d) in enumerate(c[:2] for c in ref):
         best = None
-        for j, (tt, dd) in enumerate(test):
+        for j, c in enumerate(test):
+            tt, dd = c[0], c[1]
             if dd != d or j in used:
                 continue
             if best is None or abs(tt - tc) < abs(test[best][0] - tc):
@@ -394,32 +417,45 @@ def match_crossings(ref, test):
         if best is None:
             continue
         used.add(best)
-        dts.append(test[best][0] - tc)
-    unmatched = len(ref) - len(dts)
-    surplus = len(test) - len(used)
-    return (max((abs(x) for x in dts), default=0.0), dts, unmatched, surplus)
+        pairs.append((i, best))
+    max_dt = max((abs(test[j][0] - ref[i][0]) for i, j in pairs), default=0.0)
+    return max_dt, pairs, len(ref) - len(pairs), len(test) - len(pairs)
 
 
-def compare(ref, test, probes, crossing=None, window=0.0):
+def compare(ref, test, probes, crossing=None, exclude_edges=True):
     """Compares Waveforms test against reference ref.
 
-    crossing: optional (probe, threshold, hysteresis): its crossings in both are matched and their
-    time differences reported; the max error then leaves out the reference points within
-    `window` seconds of a reference crossing (the RMS keeps every point).
-    Returns a dict: per probe (max, rms); 'crossing': (max |dt|, count ref, count test, unmatched,
-    surplus) or None."""
+    crossing: optional list of (probe, threshold, hysteresis): the switching instants. Their
+    crossings in both waveforms are matched one to one and the time differences reported
+    (checked against their own tolerance). With exclude_edges, the max error leaves out, for each
+    matched pair, the reference points between the two simulators' edges: from the earlier of the
+    two samples before the threshold to the later of the two samples after it. That span is the
+    timing difference plus the step across the edge on each side, nothing wider; the RMS keeps
+    every point.
+    Returns {"probes": {probe: (max, rms)}, "crossing": None or {"max_dt", "ref_count",
+    "test_count", "unmatched", "surplus", "excluded_time"}}."""
     result = {"probes": {}, "crossing": None}
     exclude = None
     if crossing is not None:
-        name, threshold, hysteresis = crossing
-        name = name.lower()
-        cr = crossings(ref.time, ref.signals[name], threshold, hysteresis)
-        ct = crossings(test.time, test.signals[name], threshold, hysteresis)
-        max_dt, dts, unmatched, surplus = match_crossings(cr, ct)
-        result["crossing"] = {"max_dt": max_dt, "ref_count": len(cr), "test_count": len(ct),
-                              "unmatched": unmatched, "surplus": surplus}
-        if window > 0:
-            exclude = excluded_mask(ref.time, [c[0] for c in cr], window)
+        specs = crossing if isinstance(crossing, list) else [crossing]
+        total = {"max_dt": 0.0, "ref_count": 0, "test_count": 0, "unmatched": 0, "surplus": 0}
+        intervals = []
+        for name, threshold, hysteresis in specs:
+            name = name.lower()
+            cr = crossing_brackets(ref.time, ref.signals[name], threshold, hysteresis)
+            ct = crossing_brackets(test.time, test.signals[name], threshold, hysteresis)
+            max_dt, pairs, unmatched, surplus = match_crossings(cr, ct)
+            total["max_dt"] = max(total["max_dt"], max_dt)
+            total["ref_count"] += len(cr)
+            total["test_count"] += len(ct)
+            total["unmatched"] += unmatched
+            total["surplus"] += surplus
+            for i, j in pairs:
+                intervals.append((min(cr[i][2], ct[j][2]), max(cr[i][3], ct[j][3])))
+        total["excluded_time"] = sum(hi - lo for lo, hi in intervals)
+        result["crossing"] = total
+        if exclude_edges and intervals:
+            exclude = excluded_mask(ref.time, intervals)
     for p in probes:
         p = p.lower()
         result["probes"][p] = waveform_error(ref.time, ref.signals[p], test.time, test.signals[p], exclude)

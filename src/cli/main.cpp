@@ -3,7 +3,28 @@
 // The only translation unit that includes CLI11 (slow to compile).
 #include <CLI/CLI.hpp>
 
+#include <optional>
+#include <string>
+
 #include "cli/command.hpp"
+#include "netlist/netlist.hpp"
+
+namespace {
+
+// Numbers on the command line read like the netlist's: "1m", "2.5u", "1e-6".
+CLI::Option* add_number(CLI::App& app, const std::string& name, std::optional<double>& target, const std::string& help) {
+  return app.add_option_function<std::string>(
+                name,
+                [&target, name](const std::string& text) {
+                  const std::optional<double> value = netlist::parse_number(text);
+                  if (!value || !(*value > 0)) throw CLI::ValidationError(name, "expected a positive number, got '" + text + "'");
+                  target = value;
+                },
+                help)
+      ->type_name("NUMBER");
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   padsim::CommandOptions options;
@@ -11,9 +32,9 @@ int main(int argc, char** argv) {
   app.add_option("netlist", options.netlist, "SPICE netlist with a .tran card")->required();
   app.add_option("-o,--output", options.output, "waveform CSV (default: standard output)");
   app.add_option("--probe", options.probes, "columns, e.g. \"v(out),v(a,b),i(l1)\" (default: .save/.print, else all node voltages and V and L currents)");
-  app.add_option("--rtol", options.rtol, "relative tolerance (overrides .options reltol)")->check(CLI::PositiveNumber);
-  app.add_option("--atol", options.atol, "absolute tolerance of every unknown (overrides .options abstol and vntol)")->check(CLI::PositiveNumber);
-  app.add_option("--tstop", options.tstop, "stop time (overrides .tran)")->check(CLI::PositiveNumber);
+  add_number(app, "--rtol", options.rtol, "relative tolerance (overrides .options reltol)");
+  add_number(app, "--atol", options.atol, "absolute tolerance of every unknown (overrides .options abstol and vntol)");
+  add_number(app, "--tstop", options.tstop, "stop time (overrides .tran)");
   app.add_flag("--stats", options.stats, "print run statistics as one JSON object on stderr");
   app.add_option("--events", options.events, "CSV of every event: time, element, predicate, from, to, jump energy");
   app.add_option("--raw", options.raw, "ngspice raw file (binary)");

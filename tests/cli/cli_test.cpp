@@ -1,0 +1,207 @@
+// The padsim command: columns, probes, rows at jumps, event log, statistics, exit codes and
+// the waveform kept on failure. Values are checked against closed forms.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int exit_code;
+  std::string out, err;
+};
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("padsim-cli-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path path = dir_ / name;
+    std::ofstream(path) << text;
+    return path.string();
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  static std::string read(const std::string& file) {
+    std::ifstream in(file);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+  Result run(const std::string& arguments) {
+    const std::string out = path("stdout.txt"), err = path("stderr.txt");
+    const int status = std::system((std::string(PADSIM_EXECUTABLE) + " " + arguments + " > " + out + " 2> " + err).c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read(out), read(err)};
+  }
+
+  fs::path dir_;
+};
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<double>> rows;
+  int column(const std::string& name) const {
+    for (std::size_t k = 0; k < header.size(); ++k)
+      if (header[k] == name) return static_cast<int>(k);
+    return -1;
+  }
+};
+
+Csv parse_csv(const std::string& text) {
+  Csv csv;
+  std::istringstream lines(text);
+  std::string line;
+  bool first = true;
+  while (std::getline(lines, line)) {
+    // Cells are separated by commas; a quoted cell may contain commas ("v(a,b)").
+    std::vector<std::string> cells(1);
+    bool quoted = false;
+    for (char c : line) {
+      if (c == '"') quoted = !quoted;
+      else if (c == ',' && !quoted) cells.emplace_back();
+      else cells.back() += c;
+    }
+    if (first) {
+      csv.header = cells;
+      first = false;
+      continue;
+    }
+    std::vector<double> row;
+    for (const auto& c : cells) row.push_back(std::strtod(c.c_str(), nullptr));
+    csv.rows.push_back(row);
+  }
+  return csv;
+}
+
+const char* rc_netlist =
+    "* RC charging from a 1 V source\n"
+    "V1 in 0 1\n"
+    "R1 in out 1k\n"
+    "C1 out 0 1u IC=0\n"
+    ".tran 10u 5m uic\n"
+    ".end\n";
+
+TEST_F(Cli, DefaultColumnsAreNodeVoltagesThenSourceAndInductorCurrents) {
+  const Result r = run(write("rc.cir", rc_netlist) + " --rtol 1e-6");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv csv = parse_csv(r.out);
+  EXPECT_EQ(csv.header, (std::vector<std::string>{"time", "v(in)", "v(out)", "i(v1)"}));
+  ASSERT_GT(csv.rows.size(), 10u);
+  EXPECT_EQ(csv.rows.front()[0], 0.0);
+  EXPECT_DOUBLE_EQ(csv.rows.back()[0], 5e-3);
+  for (const auto& row : csv.rows) {
+    const double expected = 1 - std::exp(-row[0] / 1e-3);
+    EXPECT_NEAR(row[2], expected, 1e-4) << "t = " << row[0];
+    EXPECT_NEAR(row[3], -(1 - expected) / 1e3, 1e-7) << "t = " << row[0];  // into the + terminal
+  }
+}
+
+TEST_F(Cli, ProbeSelectsColumnsInLowerCase) {
+  const std::string csv_path = path("out.csv");
+  const Result r = run(write("rc.cir", rc_netlist) + " -o " + csv_path + " --probe \"V(OUT), i(V1),v(in,out)\"");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv csv = parse_csv(read(csv_path));
+  EXPECT_EQ(csv.header, (std::vector<std::string>{"time", "v(out)", "i(v1)", "v(in,out)"}));
+  for (const auto& row : csv.rows) EXPECT_NEAR(row[3], 1 - row[1], 1e-12);
+}
+
+TEST_F(Cli, SaveCardChoosesColumns) {
+  const std::string netlist = std::string(rc_netlist).replace(std::string(rc_netlist).find(".end"), 4, ".save v(out)\n.end");
+  const Result r = run(write("rc.cir", netlist));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(parse_csv(r.out).header, (std::vector<std::string>{"time", "v(out)"}));
+}
+
+const char* sharing_netlist =
+    "* two capacitors joined by an ideal switch at 1 ms\n"
+    "C1 a 0 1u IC=5\n"
+    "C2 b 0 2u IC=1\n"
+    "S1 a b ctl 0 ideal\n"
+    "Vctl ctl 0 PWL(0 0 2m 1)\n"
+    ".model ideal SW(vt=0.5 vh=0 ron=0 roff=1e30)\n"
+    ".tran 10u 2m uic\n"
+    ".end\n";
+
+TEST_F(Cli, JumpGivesTwoRowsAtTheSameTimeAndIsLogged) {
+  const std::string events = path("events.csv");
+  const Result r = run(write("share.cir", sharing_netlist) + " --probe 'v(a),v(b)' --events " + events + " --stats");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv csv = parse_csv(r.out);
+  const double shared = (1e-6 * 5 + 2e-6 * 1) / 3e-6;
+  int jumps = 0;
+  for (std::size_t k = 1; k < csv.rows.size(); ++k) {
+    if (csv.rows[k][0] != csv.rows[k - 1][0]) continue;
+    ++jumps;
+    EXPECT_NEAR(csv.rows[k][0], 1e-3, 1e-12);
+    EXPECT_NEAR(csv.rows[k - 1][1], 5, 1e-9);
+    EXPECT_NEAR(csv.rows[k - 1][2], 1, 1e-9);
+    EXPECT_NEAR(csv.rows[k][1], shared, 1e-12);
+    EXPECT_NEAR(csv.rows[k][2], shared, 1e-12);
+  }
+  EXPECT_EQ(jumps, 1);
+  const Csv log = parse_csv(read(events));
+  EXPECT_EQ(log.header, (std::vector<std::string>{"time", "element", "predicate", "from", "to", "jump_energy"}));
+  ASSERT_EQ(log.rows.size(), 1u);
+  const std::string line = read(events).substr(read(events).find('\n') + 1);
+  EXPECT_NE(line.find(",s1,on,0,1,"), std::string::npos) << line;
+  EXPECT_NEAR(log.rows[0][5], 0.5 * (1e-6 * 2e-6 / 3e-6) * 16, 1e-15);
+  // --stats: one JSON object with the counters.
+  for (const char* key : {"\"steps\"", "\"rejected\"", "\"newton_iterations\"", "\"jacobians\"", "\"lu_factorizations\"",
+                          "\"events\": 1", "\"jumps\": 1", "\"unknowns\"", "\"wall_s\""})
+    EXPECT_NE(r.err.find(key), std::string::npos) << key << " in " << r.err;
+}
+
+TEST_F(Cli, BadInputExitsWithTwo) {
+  EXPECT_EQ(run(path("missing.cir")).exit_code, 2);
+  EXPECT_EQ(run("").exit_code, 2);
+  EXPECT_EQ(run(write("rc.cir", rc_netlist) + " --no-such-option").exit_code, 2);
+  Result r = run(write("rc.cir", rc_netlist) + " --probe 'v(nowhere)'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("nowhere"), std::string::npos) << r.err;
+  r = run(write("float.cir", "* floating\nV1 in 0 1\nC1 in mid 1u\nC2 mid 0 1u\n.tran 1u 1m\n.end\n"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no DC path to ground from node(s) mid"), std::string::npos) << r.err;
+  r = run(write("notran.cir", "* no analysis\nV1 in 0 1\nR1 in 0 1\n.end\n"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(".tran"), std::string::npos) << r.err;
+  r = run(write("loop.cir", "* loop\nV1 a 0 1\nV2 a 0 2\n.tran 1u 1m\n.end\n"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("loop of voltage sources"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, TstopOverridesTheNetlist) {
+  const Result r = run(write("rc.cir", rc_netlist) + " --tstop 1m");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_DOUBLE_EQ(parse_csv(r.out).rows.back()[0], 1e-3);
+}
+
+TEST_F(Cli, FailureKeepsTheWaveformAndSaysWhenAndWhy) {
+  // sqrt of v(in) + 1, which turns negative at 0.5 ms: the model leaves its domain there.
+  const std::string csv_path = path("out.csv");
+  const Result r = run(write("domain.cir",
+                             "* domain error\nV1 in 0 PWL(0 1 1m -3)\nB1 out 0 V=sqrt(v(in)+1)\nR1 out 0 1\n.tran 1u 1m\n.end\n") +
+                       " -o " + csv_path);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("simulation failed at t = "), std::string::npos) << r.err;
+  const Csv csv = parse_csv(read(csv_path));
+  ASSERT_GT(csv.rows.size(), 2u);
+  const double last = csv.rows.back()[0];
+  EXPECT_GT(last, 0.4e-3);
+  EXPECT_LT(last, 0.5e-3 + 1e-9);
+  for (const auto& row : csv.rows) EXPECT_NEAR(row[csv.column("v(out)")], std::sqrt(2 - 4 * row[0] / 1e-3), 1e-6);
+}
+
+}  // namespace

@@ -281,3 +281,90 @@ TEST(Start, HeldInitialVoltageThenRelaxes) {
 
 }  // namespace
 }  // namespace mna::test
+
+namespace mna::test {
+namespace {
+
+TEST(Events, SwitchHysteresisThresholdsAreHitExactly) {
+  // Control ramps 0 -> 2 V over 1 ms and back: on above VT + VH = 1.5 V (t = 0.75 ms), off
+  // below VT - VH = 0.5 V (t = 1.75 ms). The switch (RON 1, ROFF 1 Meg) loads a 1 V divider.
+  CircuitSpec c;
+  c.add("vctl", {"ctl", "0"}).waveform = {Waveform::Shape::piecewise_linear, {0, 0, 1e-3, 2, 2e-3, 0}};
+  c.add("v1", {"in", "0"}, 1.0);
+  c.add("r1", {"in", "out"}, 1.0);
+  c.add("s1", {"out", "0", "ctl", "0"}).model = {{"vt", 1.0}, {"vh", 0.5}, {"ron", 1.0}, {"roff", 1e6}};
+  Model m(c, {.tstep = 1e-5, .tstop = 2e-3});
+  const Simulation run = simulate(m, 2e-3, false);
+  ASSERT_TRUE(run.ok) << run.failure;
+  ASSERT_EQ(run.events.size(), 2u);
+  EXPECT_NEAR(run.events[0].t, 0.75e-3, 1e-12);
+  EXPECT_NEAR(run.events[1].t, 1.75e-3, 1e-12);
+  const int out = unknown(m, "v(out)");
+  EXPECT_NEAR(run.events[0].x_before[out], 1e6 / (1e6 + 1), 1e-12);
+  EXPECT_NEAR(run.events[0].x_after[out], 0.5, 1e-12);
+  EXPECT_NEAR(run.events[1].x_after[out], 1e6 / (1e6 + 1), 1e-12);
+}
+
+TEST(Events, ComparatorAndTimeConditionsInBehavioralSource) {
+  // out = v(in) > 0.5 ? 1 : 0 with v(in) = 1000 t, plus u(time - 0.3 ms) * 2 V.
+  using netlist::BinaryOperator;
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}).waveform = {Waveform::Shape::piecewise_linear, {0, 0, 1e-3, 1}};
+  auto& b = c.add("b1", {"out", "0"});
+  b.expression = binary(BinaryOperator::add, conditional(binary(BinaryOperator::greater, voltage("in"), number(0.5)), number(1), number(0)),
+                        binary(BinaryOperator::multiply, call("u", {binary(BinaryOperator::subtract, time(), number(0.3e-3))}), number(2)));
+  c.add("r1", {"out", "0"}, 1e3);
+  Model m(c, {.tstep = 1e-5, .tstop = 1e-3});
+  const Simulation run = simulate(m, 1e-3, false);
+  ASSERT_TRUE(run.ok) << run.failure;
+  ASSERT_EQ(run.events.size(), 2u);
+  const int out = unknown(m, "v(out)");
+  EXPECT_NEAR(run.events[0].t, 0.3e-3, 1e-12);
+  EXPECT_NEAR(run.events[0].x_after[out], 2, 1e-12);
+  EXPECT_NEAR(run.events[1].t, 0.5e-3, 1e-11);  // within padae's root-finding resolution
+  EXPECT_NEAR(run.events[1].x_after[out], 3, 1e-12);
+}
+
+TEST(Start, ControlledSourcesOperatingPoint) {
+  // v(a) = 2 V; E doubles it, G drives 1 mA/V * v(a) into 1 k, H reads i(v1) (= -2 mA
+  // through R1 = 1 k), F mirrors 3 i(v1) into 1 k.
+  CircuitSpec c;
+  c.add("v1", {"a", "0"}, 2.0);
+  c.add("r1", {"a", "0"}, 1e3);
+  c.add("e1", {"e", "0", "a", "0"}, 2.0);
+  c.add("re", {"e", "0"}, 1e3);
+  c.add("g1", {"0", "g", "a", "0"}, 1e-3);
+  c.add("rg", {"g", "0"}, 1e3);
+  c.add("h1", {"h", "0"}, 500.0).controls = {"v1"};
+  c.add("rh", {"h", "0"}, 1e3);
+  c.add("f1", {"0", "f"}, 3.0).controls = {"v1"};
+  c.add("rf", {"f", "0"}, 1e3);
+  Model m(c, {.tstep = 1e-6, .tstop = 1e-5});
+  const Simulation run = simulate(m, 1e-5, false);
+  ASSERT_TRUE(run.ok) << run.failure;
+  const Vector& x = run.states.back();
+  EXPECT_NEAR(x[unknown(m, "i(v1)")], -2e-3, 1e-15);
+  EXPECT_NEAR(x[unknown(m, "v(e)")], 4.0, 1e-12);
+  EXPECT_NEAR(x[unknown(m, "v(g)")], 2.0, 1e-12);   // 2 mA from ground into g, through 1 k
+  EXPECT_NEAR(x[unknown(m, "v(h)")], -1.0, 1e-12);  // 500 ohm * -2 mA
+  EXPECT_NEAR(x[unknown(m, "v(f)")], -6.0, 1e-12);  // 3 * -2 mA into f
+}
+
+TEST(Start, ShockleyDiodeOperatingPointSatisfiesItsEquation) {
+  // 5 V through 1 k into a diode: i = IS (exp(v / (N Vt)) - 1) + GMIN v = (5 - v) / 1 k.
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}, 5.0);
+  c.add("r1", {"in", "a"}, 1e3);
+  c.add("d1", {"a", "0"}).model = {{"is", 1e-14}, {"n", 1.0}};
+  Model m(c, {.tstep = 1e-6, .tstop = 1e-5});
+  const Simulation run = simulate(m, 1e-5, false);
+  ASSERT_TRUE(run.ok) << run.failure;
+  const double v = run.states.back()[unknown(m, "v(a)")];
+  const double vt = 1.38064852e-23 * 300.15 / 1.6021766208e-19;
+  EXPECT_NEAR(1e-14 * (std::exp(v / vt) - 1) + 1e-12 * v, (5 - v) / 1e3, 1e-9);
+  EXPECT_GT(v, 0.6);
+  EXPECT_LT(v, 0.75);
+}
+
+}  // namespace
+}  // namespace mna::test

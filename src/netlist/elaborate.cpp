@@ -14,7 +14,6 @@
 #include <numbers>
 #include <set>
 #include <unordered_map>
-#include <unordered_set>
 #include <utility>
 
 #include "netlist/netlist.hpp"
@@ -364,12 +363,12 @@ class Elaborator {
     for (const ast::Card* card : cards) {
       if (auto* subcircuit = std::get_if<ast::Subcircuit>(&card->node)) {
         bool inserted = definitions.subcircuits.emplace(subcircuit->name.text, subcircuit).second;
-        if (!inserted && warned_cards_.insert(card).second)
+        if (!inserted)
           diagnostics_.error(subcircuit->name.where,
                              "subcircuit '" + subcircuit->name.text + "' is defined twice");
       } else if (auto* model = std::get_if<ast::ModelCard>(&card->node)) {
         bool inserted = definitions.models.emplace(model->name.text, model).second;
-        if (!inserted && warned_cards_.insert(card).second)
+        if (!inserted)
           diagnostics_.error(model->name.where, "model '" + model->name.text + "' is defined twice");
       } else if (auto* param = std::get_if<ast::ParamCard>(&card->node)) {
         for (const ast::Assignment& assignment : param->assignments)
@@ -394,11 +393,9 @@ class Elaborator {
         {"sw", {ModelType::voltage_switch, {"vt", "vh", "ron", "roff"}}},
         {"csw", {ModelType::current_switch, {"it", "ih", "ron", "roff"}}},
     };
-    bool first_time = warned_models_.insert(&card).second;  // warn once, not per instance
     auto type = known.find(card.type.text);
     if (type == known.end()) {
-      if (first_time)
-        diagnostics_.warning(card.type.where, "model type '" + card.type.text +
+      diagnostics_.warning(card.type.where, "model type '" + card.type.text +
                                                   "' is not supported by padsim; model '" +
                                                   card.name.text + "' is ignored");
       return;
@@ -406,7 +403,7 @@ class Elaborator {
     FlatModel model{instance.prefix + card.name.text, type->second.first, {}, card.name.where};
     const auto& names = type->second.second;
     for (const ast::Assignment& parameter : card.parameters) {
-      if (first_time && std::find(names.begin(), names.end(), parameter.name.text) == names.end())
+      if (std::find(names.begin(), names.end(), parameter.name.text) == names.end())
         diagnostics_.warning(parameter.name.where, "unknown " + card.type.text + " model parameter '" +
                                                        parameter.name.text + "' is kept but unused");
       if (auto v = value(parameter.value, *instance.scope))
@@ -691,8 +688,7 @@ class Elaborator {
 
   bool at_top_level(const ast::Card& card, const Instance& instance, const char* what) {
     if (instance.prefix.empty()) return true;
-    if (warned_cards_.insert(&card).second)
-      diagnostics_.warning(card.where, std::string(what) + " inside a subcircuit is ignored");
+    diagnostics_.warning(card.where, std::string(what) + " inside a subcircuit is ignored");
     return false;
   }
 
@@ -777,8 +773,7 @@ class Elaborator {
     circuit_.title = card.text;
   }
 
-  void elaborate_card(const ast::IgnoredCard& card, const ast::Card& whole, const Instance&) {
-    if (!warned_cards_.insert(&whole).second) return;
+  void elaborate_card(const ast::IgnoredCard& card, const ast::Card&, const Instance&) {
     const std::string& directive = card.directive.text;
     if (is_one_of(directive, {"ac", "dc", "op", "noise", "tf", "pz", "sens", "disto", "sp", "pss"})) {
       if (has_tran_)
@@ -823,8 +818,6 @@ class Elaborator {
   std::unordered_map<std::string, std::size_t> element_index_;
   std::vector<ControlUse> control_uses_;
   std::vector<std::pair<std::string, SourceRange>> branch_current_uses_;
-  std::unordered_set<const void*> warned_models_;
-  std::unordered_set<const void*> warned_cards_;
 };
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <string_view>
 
@@ -45,37 +46,55 @@ struct finite_real_policies : x3::ureal_policies<double> {
 };
 inline x3::real_parser<double, finite_real_policies> const unsigned_real{};
 
-// Applies an engineering suffix; the letters after it are units and ignored ("10uF",
-// "1kOhm"). Letters that are no suffix are units only ("5V"), as in SPICE. Small scales divide
-// by an exact power of ten, so that 10u is the double nearest to 1e-5 (10 * 1e-6 is not).
-inline double apply_suffix(double mantissa, std::string_view letters) {
+// The power of ten of an engineering suffix; the letters after it are units and ignored
+// ("10uF", "1kOhm"). Letters that are no suffix are units only ("5V"), as in SPICE. nullopt
+// for mil, which is no power of ten.
+inline std::optional<int> suffix_exponent(std::string_view letters) {
   std::string suffix = lower(letters.substr(0, 3));
-  if (suffix == "meg") return mantissa * 1e6;
-  if (suffix == "mil") return mantissa * 254 / 1e7;  // 25.4e-6
-  if (suffix.empty()) return mantissa;
+  if (suffix == "meg") return 6;
+  if (suffix == "mil") return std::nullopt;
+  if (suffix.empty()) return 0;
   switch (suffix[0]) {
-    case 'f': return mantissa / 1e15;
-    case 'p': return mantissa / 1e12;
-    case 'n': return mantissa / 1e9;
-    case 'u': return mantissa / 1e6;
-    case 'm': return mantissa / 1e3;
-    case 'k': return mantissa * 1e3;
-    case 'g': return mantissa * 1e9;
-    case 't': return mantissa * 1e12;
-    default: return mantissa;
+    case 'f': return -15;
+    case 'p': return -12;
+    case 'n': return -9;
+    case 'u': return -6;
+    case 'm': return -3;
+    case 'k': return 3;
+    case 'g': return 9;
+    case 't': return 12;
+    default: return 0;
   }
 }
 
 // The value of the whole text [first, last) of a number token (optional sign, mantissa,
-// suffix, units); nullopt when it is not one or not finite.
+// suffix, units); nullopt when it is not one or not finite. X3 checks the syntax (and rejects
+// nan and inf); the value is converted by std::from_chars with the suffix folded into the
+// exponent, so that it is the double nearest to the decimal value (0.1u is 1e-7 exactly as
+// written, and printing then parsing a double gives it back).
 inline std::optional<double> number_value(Iterator first, Iterator last) {
   bool negative = false;
   if (first != last && (*first == '-' || *first == '+')) negative = *first++ == '-';
-  double mantissa = 0;
-  if (!x3::parse(first, last, unsigned_real, mantissa)) return std::nullopt;
-  if (!std::all_of(first, last, [](char c) { return std::isalpha(static_cast<unsigned char>(c)); }))
+  Iterator mantissa_end = first;
+  double ignored = 0;
+  if (!x3::parse(mantissa_end, last, unsigned_real, ignored)) return std::nullopt;
+  if (!std::all_of(mantissa_end, last, [](char c) { return std::isalpha(static_cast<unsigned char>(c)); }))
     return std::nullopt;
-  double value = apply_suffix(mantissa, std::string_view(&*first, static_cast<std::size_t>(last - first)));
+  std::string mantissa(first, mantissa_end);
+  long long exponent = 0;
+  if (auto e = mantissa.find_first_of("eE"); e != std::string::npos) {
+    std::string_view digits = std::string_view(mantissa).substr(e + 1);
+    if (!digits.empty() && digits[0] == '+') digits.remove_prefix(1);
+    auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), exponent);
+    if (error != std::errc() || end != digits.data() + digits.size()) return std::nullopt;
+    mantissa.resize(e);
+  }
+  std::optional<int> shift = suffix_exponent(std::string_view(&*mantissa_end, static_cast<std::size_t>(last - mantissa_end)));
+  std::string scaled = mantissa + "e" + std::to_string(exponent + shift.value_or(0));
+  double value = 0;
+  auto [end, error] = std::from_chars(scaled.data(), scaled.data() + scaled.size(), value);
+  if (error != std::errc() || end != scaled.data() + scaled.size()) return std::nullopt;
+  if (!shift) value = value * 254 / 1e7;  // mil: 25.4e-6
   if (!std::isfinite(value)) return std::nullopt;
   return negative ? -value : value;
 }

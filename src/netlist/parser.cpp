@@ -120,6 +120,7 @@ class Parser {
   // One parsed card: a card, an .ends (closing the innermost subcircuit), or nothing.
   struct Parsed {
     std::optional<ast::Card> card;
+    bool opens_subcircuit = false;
     bool ends = false;
     std::optional<ast::Word> ends_name;
     SourceRange where;
@@ -154,20 +155,24 @@ class Parser {
         ast::Card closed = std::move(open.back());
         open.pop_back();
         const ast::Word& name = std::get<ast::Subcircuit>(closed.node).name;
+        if (name.text.empty()) continue;
         if (parsed.ends_name && parsed.ends_name->text != name.text)
           diagnostics_.error(parsed.ends_name->where, "'.ends " + parsed.ends_name->text +
                                                           "' closes subcircuit '" + name.text + "'");
         (open.empty() ? cards : std::get<ast::Subcircuit>(open.back().node).body)
             .push_back(std::move(closed));
-      } else if (parsed.card && std::holds_alternative<ast::Subcircuit>(parsed.card->node)) {
-        open.push_back(std::move(*parsed.card));
+      } else if (parsed.opens_subcircuit) {
+        // A .subckt line that did not parse still opens a body (an unnamed one, dropped at its
+        // .ends), so that the body and the .ends give no follow-up errors.
+        open.push_back(parsed.card ? std::move(*parsed.card) : ast::Card{ast::Subcircuit{}, parsed.where});
       } else if (parsed.card) {
         body.push_back(std::move(*parsed.card));
       }
     }
     for (const ast::Card& unclosed : open) {
       const ast::Word& name = std::get<ast::Subcircuit>(unclosed.node).name;
-      diagnostics_.error(name.where, "missing .ends for subcircuit '" + name.text + "'");
+      if (!name.text.empty())
+        diagnostics_.error(name.where, "missing .ends for subcircuit '" + name.text + "'");
     }
     return cards;
   }
@@ -295,7 +300,11 @@ class Parser {
       return parsed;
     }
     if (directive == "model") return parse_as<ast::ModelCard>(parser::model_card, line, where);
-    if (directive == "subckt") return parse_as<ast::Subcircuit>(parser::subckt_card, line, where);
+    if (directive == "subckt") {
+      Parsed parsed = parse_as<ast::Subcircuit>(parser::subckt_card, line, where);
+      parsed.opens_subcircuit = true;
+      return parsed;
+    }
     if (directive == "ends") {
       Parsed parsed;
       parsed.where = where;

@@ -22,17 +22,25 @@ std::string_view SourceFile::line(int number) const {
   return std::string_view(text).substr(begin, end - begin);
 }
 
+bool Diagnostics::add(Severity severity, SourceRange where, std::string message) {
+  const SourcePosition& begin = where.begin;
+  std::string key = fmt::format("{}:{}:{}:{}:{}", static_cast<const void*>(begin.file.get()),
+                                begin.line, begin.column, static_cast<int>(severity), message);
+  if (!seen_.insert(std::move(key)).second) return false;
+  items_.push_back({severity, std::move(where), std::move(message)});
+  return true;
+}
+
 void Diagnostics::error(SourceRange where, std::string message) {
-  items_.push_back({Severity::error, std::move(where), std::move(message)});
-  ++error_count_;
+  if (add(Severity::error, std::move(where), std::move(message))) ++error_count_;
 }
 
 void Diagnostics::warning(SourceRange where, std::string message) {
-  items_.push_back({Severity::warning, std::move(where), std::move(message)});
+  add(Severity::warning, std::move(where), std::move(message));
 }
 
 void Diagnostics::note(SourceRange where, std::string message) {
-  items_.push_back({Severity::note, std::move(where), std::move(message)});
+  add(Severity::note, std::move(where), std::move(message));
 }
 
 std::string Diagnostics::to_string() const {

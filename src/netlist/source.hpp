@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <unordered_set>
 #include <vector>
 
 #include "netlist/position.hpp"
@@ -31,6 +32,8 @@ struct Diagnostic {
 };
 
 // Collects diagnostics of a whole parse/elaboration so that several errors are reported at once.
+// The same message at the same place is kept once (a subcircuit body is elaborated once per
+// instance, its errors are not).
 class Diagnostics {
  public:
   void error(SourceRange where, std::string message);
@@ -45,7 +48,10 @@ class Diagnostics {
   std::string to_string() const;
 
  private:
+  bool add(Severity severity, SourceRange where, std::string message);
+
   std::vector<Diagnostic> items_;
+  std::unordered_set<std::string> seen_;
   int error_count_ = 0;
 };
 

@@ -1,5 +1,6 @@
 // Every netlist of the repository (circuits/ and tests/, found at run time) parses and
-// elaborates without errors. Deliberately broken netlists live in directories named invalid.
+// elaborates without errors, and its printout parses to the same AST. Deliberately broken
+// netlists live in directories named invalid.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -27,6 +28,16 @@ std::vector<fs::path> netlists() {
     }
   }
   return found;
+}
+
+TEST(Corpus, EveryNetlistRoundTrips) {
+  for (const fs::path& path : netlists()) {
+    netlist::Diagnostics diagnostics;
+    std::string printed = netlist::print(netlist::parse_file(path, diagnostics));
+    auto reparsed = netlist::parse_text(printed, path.string(), diagnostics);
+    EXPECT_FALSE(diagnostics.has_errors()) << path << "\n" << diagnostics.to_string();
+    EXPECT_EQ(netlist::print(reparsed), printed) << path;
+  }
 }
 
 TEST(Corpus, EveryNetlistParsesAndElaborates) {

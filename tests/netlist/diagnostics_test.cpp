@@ -136,6 +136,25 @@ TEST(Diagnostics, SeveralErrorsInOnePass) {
   EXPECT_EQ(lines, (std::vector<int>{2, 3, 5, 6}));
 }
 
+TEST(Diagnostics, BrokenSubcktLineGivesNoFollowUpErrors) {
+  netlist::Diagnostics diagnostics;
+  netlist::parse_text("t\n.subckt\nR1 a b 1\n.ends\nR2 a b 1\n", "t.cir", diagnostics);
+  ASSERT_EQ(diagnostics.error_count(), 1) << diagnostics.to_string();
+  EXPECT_EQ(diagnostics.all()[0].message, "expected a subcircuit name");
+  EXPECT_EQ(diagnostics.all()[0].where.begin.line, 2);
+}
+
+TEST(Diagnostics, SubcircuitErrorsAreReportedOncePerPlace) {
+  netlist::Diagnostics diagnostics;
+  auto parsed = netlist::parse_text(
+      "t\n.subckt s a\nR1 a 0 {undefined}\n.ends\nX1 n1 s\nX2 n2 s\nX3 n3 s\n", "t.cir",
+      diagnostics);
+  EXPECT_FALSE(netlist::elaborate(parsed, diagnostics));
+  ASSERT_EQ(diagnostics.error_count(), 1) << diagnostics.to_string();
+  EXPECT_EQ(diagnostics.all()[0].message, "parameter 'undefined' is not defined");
+  EXPECT_EQ(diagnostics.all()[0].where.begin.line, 3);
+}
+
 TEST(Diagnostics, DeepNestingIsAnErrorNotAStackOverflow) {
   // 100 parentheses reach the nesting limit of 200 (an expression and a unary level each); the
   // 101st '(' is at column 8 + 101.

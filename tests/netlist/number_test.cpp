@@ -1,6 +1,8 @@
 // Engineering notation: suffixes, units, and what is not a number.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include "netlist/netlist.hpp"
 
 namespace {
@@ -20,6 +22,7 @@ const NumberCase numbers[] = {
     {"1g", 1e9},        {"1t", 1e12},        {"1mil", 25.4e-6},  {"1Mil", 25.4e-6},
     {"10F", 1e-14},     {"5V", 5.0},         {"1e-3k", 1.0},     {"100nH", 1e-7},
     {"47uF", 47e-6},    {"1a", 1.0},         {"2.5Ohm", 2.5},    {"1Hz", 1.0},
+    {"0.1u", 1e-7},     {"1.9u", 1.9e-6},    {"2.78us", 2.78e-6}, {"1.5e2k", 1.5e5},
 };
 
 TEST(Number, EngineeringSuffixes) {
@@ -28,6 +31,13 @@ TEST(Number, EngineeringSuffixes) {
     ASSERT_TRUE(value.has_value()) << c.text;
     EXPECT_EQ(*value, c.value) << c.text;
   }
+}
+
+// Printing a double with the shortest representation and parsing it gives the same double.
+TEST(Number, ShortestPrintoutRoundTrips) {
+  for (double value : {1.0000000000000001e-07, 0.1 + 0.2, 1.0 / 3.0, 2.7799999999999996e-06,
+                       6.02214076e23, 5e-324, 1.7976931348623157e308, 123456789.0})
+    EXPECT_EQ(netlist::parse_number(fmt::format("{}", value)), value) << fmt::format("{}", value);
 }
 
 TEST(Number, RejectsNanInfAndGarbage) {

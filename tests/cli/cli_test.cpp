@@ -204,4 +204,39 @@ TEST_F(Cli, FailureKeepsTheWaveformAndSaysWhenAndWhy) {
   for (const auto& row : csv.rows) EXPECT_NEAR(row[csv.column("v(out)")], std::sqrt(2 - 4 * row[0] / 1e-3), 1e-6);
 }
 
+TEST_F(Cli, RawFileReadsBackInNgspice) {
+  if (std::system("command -v ngspice > /dev/null 2>&1") != 0) GTEST_SKIP() << "ngspice not installed";
+  for (const char* mode : {"", " --ascii"}) {
+    const std::string raw = path("rc.raw"), csv_path = path("rc.csv"), back = path("back.txt");
+    const Result r = run(write("rc.cir", rc_netlist) + " -o " + csv_path + " --raw " + raw + mode);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string deck = write("load.cir", "* read back\n.control\nset wr_singlescale\nset wr_vecnames\noption numdgt=15\nload " +
+                                                   raw + "\nwrdata " + back + " v(out) i(v1)\nquit\n.endc\n.end\n");
+    ASSERT_EQ(std::system(("ngspice -b " + deck + " > /dev/null 2>&1").c_str()), 0);
+    // wrdata: a header line, then whitespace-separated time, v(out), i(v1).
+    std::istringstream text(read(back));
+    std::string header;
+    std::getline(text, header);
+    const Csv csv = parse_csv(read(csv_path));
+    std::size_t k = 0;
+    double t, v, i;
+    while (text >> t >> v >> i) {
+      ASSERT_LT(k, csv.rows.size());
+      EXPECT_NEAR(t, csv.rows[k][0], 1e-14 * std::max(1e-3, t)) << mode;
+      EXPECT_NEAR(v, csv.rows[k][2], 1e-13) << mode;
+      EXPECT_NEAR(i, csv.rows[k][3], 1e-16) << mode;
+      ++k;
+    }
+    EXPECT_EQ(k, csv.rows.size()) << mode;
+  }
+}
+
+TEST_F(Cli, PlotWritesPng) {
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "gnuplot not installed";
+  const std::string png = path("rc.png");
+  const Result r = run(write("rc.cir", rc_netlist) + " -o " + path("rc.csv") + " --plot " + png);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read(png).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+}
+
 }  // namespace

@@ -190,5 +190,19 @@ TEST(DeviceLoad, ShockleyDiodeMatchesNgspiceEquations) {
   EXPECT_NEAR(l.f[0], -1e-14 * (1 + arg) - 1e-12, 1e-26);
 }
 
+TEST(DeviceLoad, DiodeJunctionEnergyIsTheIntegralOfVdq) {
+  // Below FC VJ: E(v) = integral of u CJO (1 - u/VJ)^-M du, closed form for M = 0.5:
+  // with s = 1 - u/VJ: E = CJO VJ^2 [ (2/3) s^(3/2) - 2 s^(1/2) ] from s(0) = 1 to s(v).
+  CircuitSpec c;
+  c.add("d1", {"a", "0"}).model = {{"cjo", 1e-12}, {"vj", 0.8}, {"m", 0.5}, {"fc", 0.5}};
+  Model m(c, {});
+  Vector x(1);
+  x << -2.0;
+  const double s = 1 + 2.0 / 0.8;
+  auto primitive = [](double s) { return 2.0 / 3.0 * std::pow(s, 1.5) - 2 * std::sqrt(s); };
+  const double expected = 1e-12 * 0.8 * 0.8 * (primitive(s) - primitive(1));
+  EXPECT_NEAR(m.stored_energy(x), expected, 1e-9 * expected);
+}
+
 }  // namespace
 }  // namespace mna::test

@@ -27,6 +27,9 @@ namespace {
 constexpr int kMaxOrder = 5;
 constexpr int kHistory = kMaxOrder + 2;
 constexpr int kMaxNewtonIterations = 4;
+// Exponential device equations (junctions) far from their solution need many full Newton
+// steps; tried when modified Newton fails with a fresh matrix, before the step is cut.
+constexpr int kMaxFullNewtonIterations = 30;
 constexpr double kNewtonTolerance = 0.33;   // of the error-test tolerance (IDA's epcon)
 constexpr double kMaxConvergenceRate = 0.9;
 constexpr int kMaxErrorTestFailures = 10;
@@ -70,11 +73,12 @@ struct Integrator::Impl {
   void set_coefficients();
   void predict();
   enum class Correction { converged, diverged, outside_domain, singular };
-  Correction correct(double t_new, bool fresh_matrix);
+  enum class Newton { modified, modified_fresh, full };
+  Correction correct(double t_new, Newton mode);
   bool error_test(double& error_k, double& error_k_minus_1, int& order_new);
   void complete_step(double error_k, double error_k_minus_1, int order_new);
   void restore();
-  void shrink_step(double ratio);
+  void rescale_first_step();
   void update_weights();
   double minimum_step() const;
 
@@ -206,15 +210,14 @@ void Integrator::Impl::restore() {
   }
 }
 
-// A new step size after a failure. In the first step after a (re)start there is no previous
-// step: the history is the initial derivative, rescaled with h (IDA's IDAHandleNFlag, nst == 0).
-void Integrator::Impl::shrink_step(double ratio) {
-  h *= ratio;
-  if (order_used == 0) {
-    psi[0] = h;
-    phi_x[1] *= ratio;
-    phi_q[1] *= ratio;
-  }
+// In the first step after a (re)start there is no previous step: the history is the initial
+// derivative times h, so it follows every change of h (IDA's IDAHandleNFlag for nst == 0).
+void Integrator::Impl::rescale_first_step() {
+  if (order_used != 0 || h == psi[0]) return;
+  const double ratio = h / psi[0];
+  phi_x[1] *= ratio;
+  phi_q[1] *= ratio;
+  psi[0] = h;
 }
 
 void Integrator::Impl::predict() {
@@ -228,10 +231,11 @@ void Integrator::Impl::predict() {
   }
 }
 
-// Modified Newton on  qdot_pred + cj (q(x) - q_pred) + f(t, x) = 0, from x_pred.
-Integrator::Impl::Correction Integrator::Impl::correct(double t_new, bool fresh_matrix) {
+// Newton on  qdot_pred + cj (q(x) - q_pred) + f(t, x) = 0, from x_pred: modified Newton with
+// the matrix reused across steps (IDA's), or refactored at every iterate (mode full).
+Integrator::Impl::Correction Integrator::Impl::correct(double t_new, Newton mode) {
   x_new = x_predicted;
-  if (fresh_matrix) {
+  auto factor_here = [&]() {
     auto outcome = newton.factor(t_new, x_new, p, cj);
     if (outcome == NewtonMatrix::Outcome::outside_domain) return Correction::outside_domain;
     if (outcome == NewtonMatrix::Outcome::singular) return Correction::singular;
@@ -239,15 +243,20 @@ Integrator::Impl::Correction Integrator::Impl::correct(double t_new, bool fresh_
     cj_of_matrix = cj;
     step_of_matrix = statistics.steps;
     convergence_factor = 20;
+    return Correction::converged;
+  };
+  if (mode != Newton::modified) {
+    if (Correction outcome = factor_here(); outcome != Correction::converged) return outcome;
   } else if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) {
     return Correction::outside_domain;
   }
 
-  const double cj_ratio = cj / cj_of_matrix;
+  const int max_iterations = mode == Newton::full ? kMaxFullNewtonIterations : kMaxNewtonIterations;
   const double toldel = 1e-4 * kNewtonTolerance;
-  double first_norm = 0;
+  double first_norm = 0, previous_norm = 0;
   for (int m = 0;; ++m) {
     ++statistics.newton_iterations;
+    const double cj_ratio = cj / cj_of_matrix;
     const Load& load = newton.load();
     residual = q_derivative_predicted + cj * (load.q - q_predicted) + load.f;
     for (int i : newton.auxiliary_unknowns()) residual[i] = x_new[i] - x_predicted[i];
@@ -258,7 +267,11 @@ Integrator::Impl::Correction Integrator::Impl::correct(double t_new, bool fresh_
     double norm = weighted_max_norm(delta, inverse_weight_x);
     if (!std::isfinite(norm)) return Correction::diverged;
     bool converged = false;
-    if (m == 0) {
+    if (mode == Newton::full) {
+      // Quadratic convergence: judge by the last two corrections.
+      double rate = m == 0 ? 1.0 : norm / previous_norm;
+      converged = norm <= 1e-4 * toldel || (rate < kMaxConvergenceRate && rate / (1 - rate) * norm <= kNewtonTolerance);
+    } else if (m == 0) {
       first_norm = norm;
       converged = norm <= 1e-4 * toldel;
     } else {
@@ -266,9 +279,14 @@ Integrator::Impl::Correction Integrator::Impl::correct(double t_new, bool fresh_
       if (rate > kMaxConvergenceRate) return Correction::diverged;
       convergence_factor = rate / (1 - rate);
     }
-    if (converged || convergence_factor * norm <= kNewtonTolerance) break;
-    if (m + 1 >= kMaxNewtonIterations) return Correction::diverged;
-    if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return Correction::outside_domain;
+    previous_norm = norm;
+    if (converged || (mode != Newton::full && convergence_factor * norm <= kNewtonTolerance)) break;
+    if (m + 1 >= max_iterations) return Correction::diverged;
+    if (mode == Newton::full) {
+      if (Correction outcome = factor_here(); outcome != Correction::converged) return outcome;
+    } else if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) {
+      return Correction::outside_domain;
+    }
   }
   // q at the converged point: the history must hold q(x_n) exactly for charge conservation.
   if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return Correction::outside_domain;
@@ -378,14 +396,16 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       weighted_max_norm(correction_q, inverse_weight_q, &worst);
       return fail(t, "step size " + format_time(h) + " s fell below the minimum (round-off) at t = " + format_time(t), worst);
     }
+    rescale_first_step();
     set_coefficients();
     predict();
     const double t_new = ends_at_target ? target : t + h;
 
     bool fresh = !have_matrix || std::abs(cj / cj_of_matrix - 1) > kJacobianCjChange ||
                  statistics.steps >= step_of_matrix + kStepsBetweenJacobians;
-    Correction correction = correct(t_new, fresh);
-    if (correction == Correction::diverged && !fresh) correction = correct(t_new, true);
+    Correction correction = correct(t_new, fresh ? Newton::modified_fresh : Newton::modified);
+    if (correction == Correction::diverged && !fresh) correction = correct(t_new, Newton::modified_fresh);
+    if (correction == Correction::diverged) correction = correct(t_new, Newton::full);
 
     if (correction != Correction::converged) {
       restore();
@@ -402,7 +422,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
         if (correction == Correction::singular) worst = newton.singular_column();
         return fail(t, why + " at t = " + format_time(t), worst);
       }
-      shrink_step(0.25);
+      h *= 0.25;
       have_matrix = have_matrix && correction != Correction::singular;
       continue;
     }
@@ -420,10 +440,10 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       order = order_new;
       if (error_test_failures == 1) {
         double ratio = 0.9 * std::pow(2 * error_new + 1e-4, -1.0 / (order + 1));
-        shrink_step(std::clamp(ratio, 0.25, 0.9));
+        h *= std::clamp(ratio, 0.25, 0.9);
       } else {
         if (error_test_failures > 2) order = 1;
-        shrink_step(0.25);
+        h *= 0.25;
       }
       startup_phase = false;
       continue;
@@ -532,7 +552,8 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       for (const JumpEntry& entry : jump_entries) {
         if (target[entry.predicate] == p[entry.predicate] || entry.value == 0) continue;
         x_jumped[entry.row] += entry.value * (target[entry.predicate] ? 1.0 : -1.0);
-        last_event.jumped = true;
+        // A mode held in an auxiliary unknown changing is not a jump of the state.
+        if (!newton.is_auxiliary(entry.row)) last_event.jumped = true;
       }
     }
     for (int k = 0; k < predicate_count; ++k) {

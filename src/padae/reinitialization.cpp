@@ -125,10 +125,12 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   auto consistent = derivatives(t, x_plus, p_to, h_reference);
   if (!consistent) return consistent;
   consistent->impulse = h_impulse * x_plus;
+  // A jump moves q by far more than the smooth motion does over the impulse step.
   for (Eigen::Index i = 0; i < q_before.size(); ++i) {
     double moved = std::abs(consistent->q[i] - q_before[i]);
+    double smooth = 10 * h_impulse * std::abs(consistent->q_derivative[i]);
     double scale = std::abs(consistent->q[i]) + std::abs(q_before[i]);
-    if (moved > 1e-10 * scale + std::numeric_limits<double>::min()) consistent->charges_moved = true;
+    if (moved > smooth + 1e-10 * scale + std::numeric_limits<double>::min()) consistent->charges_moved = true;
   }
   return consistent;
 }

@@ -1,11 +1,13 @@
 # Thin wrapper around CMake. The two commands the README names:
 #   make demo   installs what is missing, builds, simulates circuits/buck.cir (CSV + PNG)
-#   make test   installs what is missing, builds and runs every test
+#   make test   installs what is missing, builds and runs every test: the suite, the suite
+#               again under ASan + UBSan, and the netlist parser's fuzzer for 60 s
+# Quicker, while developing: make check (the suite only).
 BUILD ?= build
 JOBS ?= 2
 DEMO ?= circuits/buck.cir
 
-.PHONY: deps build demo test test-sanitize bench clean
+.PHONY: deps build demo test check test-sanitize fuzz bench clean
 
 deps:
 	@scripts/install-deps.sh
@@ -19,7 +21,9 @@ demo: build
 	$(BUILD)/src/cli/padsim $(DEMO) -o out/demo.csv --plot out/demo.png --stats
 	@echo "waveform: out/demo.csv  plot: out/demo.png"
 
-test: build
+test: check test-sanitize fuzz
+
+check: build
 	@cd $(BUILD) && ctest --output-on-failure -j$(JOBS)
 
 test-sanitize: deps
@@ -27,9 +31,12 @@ test-sanitize: deps
 	@cmake --build $(BUILD)-sanitize -j$(JOBS)
 	@cd $(BUILD)-sanitize && ctest --output-on-failure -j$(JOBS)
 
+fuzz: deps
+	@tests/netlist/run-fuzz.sh 60
+
 bench: deps
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DPADSIM_BENCH=ON >/dev/null
 	@cmake --build $(BUILD) -j$(JOBS)
 
 clean:
-	rm -rf $(BUILD) $(BUILD)-sanitize out
+	rm -rf $(BUILD) $(BUILD)-sanitize build-netlist-fuzz out

@@ -34,9 +34,20 @@ void CardContext::expected(Iterator where, const std::string& what) const {
 
 }  // namespace parser
 
-std::shared_ptr<const SourceFile> read_source(const std::filesystem::path& path);
-
 namespace {
+
+// The file's text; null if it is not a readable regular file (devices and directories are
+// refused so that an include cannot block or read forever).
+std::shared_ptr<const SourceFile> read_source(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return nullptr;
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) return nullptr;
+  std::ostringstream text;
+  text << stream.rdbuf();
+  return std::make_shared<const SourceFile>(path.string(), text.str());
+}
+
 
 using parser::CardContext;
 using parser::Iterator;
@@ -403,16 +414,6 @@ class Parser {
 };
 
 }  // namespace
-
-std::shared_ptr<const SourceFile> read_source(const std::filesystem::path& path) {
-  std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error)) return nullptr;
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) return nullptr;
-  std::ostringstream text;
-  text << stream.rdbuf();
-  return std::make_shared<const SourceFile>(path.string(), text.str());
-}
 
 ast::Netlist parse_text(std::string text, std::string path, Diagnostics& diagnostics) {
   auto file = std::make_shared<const SourceFile>(std::move(path), std::move(text));

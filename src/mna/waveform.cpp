@@ -1,5 +1,6 @@
 #include "mna/waveform.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -59,6 +60,23 @@ std::vector<double> with_defaults(Waveform::Shape shape, std::vector<double> p, 
 
 }  // namespace
 
+// The corners of the pulse period that contains t (the first period before TD, the last one
+// after NP pulses). value() and next_corner() both use these very numbers, so that the
+// integrator, which lands exactly on a corner, and the function agree on which side it is.
+SourceFunction::PulseCorners SourceFunction::pulse_corners(double t) const {
+  const double td = p_[2], tr = p_[3], tf = p_[4], pw = p_[5], per = p_[6], count = p_[7];
+  auto start_of = [&](double k) { return td + k * per; };
+  double k = t <= td ? 0 : std::floor((t - td) / per);
+  if (k > 0 && start_of(k) > t) --k;  // floor's rounding against the start as computed here
+  if (start_of(k + 1) <= t) ++k;
+  if (count > 0 && k > count - 1) k = count - 1;
+  const double start = start_of(k), next = count > 0 && k + 1 >= count ? infinity : start_of(k + 1);
+  // A period's corners never pass the next period's start, and one within round-off of it is it
+  // (tr + pw + tf = PER computed two ways differs by ulps: no step should have to fit between).
+  auto corner = [&](double c) { return next - c <= 1e-9 * per ? next : c; };
+  return {start, corner(start + tr), corner(start + tr + pw), corner(start + tr + pw + tf), next};
+}
+
 SourceFunction::SourceFunction(const Waveform& waveform, double dc_value, const RunSettings& run,
                                const std::string& element)
     : shape_(waveform.shape), p_(with_defaults(waveform.shape, waveform.parameters, run, element)), dc_(dc_value) {}
@@ -68,15 +86,12 @@ double SourceFunction::value(double t) const {
   switch (shape_) {
     case Waveform::Shape::constant: return dc_;
     case Waveform::Shape::pulse: {
-      const double v1 = p_[0], v2 = p_[1], td = p_[2], tr = p_[3], tf = p_[4], pw = p_[5], per = p_[6];
-      if (t <= td) return v1;
-      double local = t - td;
-      const double periods = std::floor(local / per);
-      if (p_[7] <= 0 || periods < p_[7]) local -= periods * per;
-      else local -= (p_[7] - 1) * per;  // after the last pulse: stays at its end value
-      if (local < tr) return v1 + (v2 - v1) * local / tr;
-      if (local <= tr + pw) return v2;
-      if (local < tr + pw + tf) return v2 + (v1 - v2) * (local - tr - pw) / tf;
+      const double v1 = p_[0], v2 = p_[1];
+      const PulseCorners c = pulse_corners(t);
+      if (t <= c.rise_start) return v1;
+      if (t < c.rise_end) return v1 + (v2 - v1) * (t - c.rise_start) / (c.rise_end - c.rise_start);
+      if (t <= c.fall_start) return v2;
+      if (t < c.fall_end) return v2 + (v1 - v2) * (t - c.fall_start) / (c.fall_end - c.fall_start);
       return v1;
     }
     case Waveform::Shape::sine: {
@@ -112,17 +127,9 @@ double SourceFunction::next_corner(double t) const {
   switch (shape_) {
     case Waveform::Shape::constant: return infinity;
     case Waveform::Shape::pulse: {
-      const double td = p_[2], tr = p_[3], tf = p_[4], pw = p_[5], per = p_[6];
-      const double offsets[] = {0, tr, tr + pw, tr + pw + tf};
-      // Corners of the period containing t, then of the next one.
-      double first_period = t <= td ? 0 : std::floor((t - td) / per);
-      for (double k = std::max(0.0, first_period - 1); k <= first_period + 1; ++k) {
-        if (p_[7] > 0 && k >= p_[7]) break;
-        for (double offset : offsets) {
-          const double corner = td + k * per + offset;
+      for (const PulseCorners& c : {pulse_corners(t), pulse_corners(pulse_corners(t).next_period)})
+        for (double corner : {c.rise_start, c.rise_end, c.fall_start, c.fall_end})
           if (corner > t) return corner;
-        }
-      }
       return infinity;
     }
     case Waveform::Shape::sine: return p_[3] > t ? p_[3] : infinity;

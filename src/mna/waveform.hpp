@@ -21,6 +21,11 @@ class SourceFunction {
   double next_corner(double t) const;
 
  private:
+  struct PulseCorners {
+    double rise_start, rise_end, fall_start, fall_end, next_period;
+  };
+  PulseCorners pulse_corners(double t) const;
+
   Waveform::Shape shape_;
   std::vector<double> p_;  // parameters with defaults filled in
   double dc_;

@@ -29,13 +29,30 @@ TEST(Waveform, PulseRampsHoldsAndRepeats) {
   EXPECT_NEAR(f.next_corner(12.1e-6), 13e-6, 1e-18);
 }
 
+TEST(Waveform, PulseCornersAgreeWithValuesAfterManyPeriods) {
+  // A triangle: every period starts at -1 exactly on the corner the integrator lands on, and
+  // rises right after it (floating-point period arithmetic must not put the kink a few ulps off).
+  SourceFunction f({Shape::pulse, {-1, 1, 0, 50e-6, 50e-6, 0, 100e-6}}, 0, run, "vtri");
+  for (double t = f.next_corner(0); t < 10e-3; t = f.next_corner(t)) {
+    const double v = f.value(t), after = f.value(t + 1e-12);
+    if (v < 0) {
+      EXPECT_DOUBLE_EQ(v, -1) << "corner " << t;
+      EXPECT_GT(after, -1) << "corner " << t;
+    } else {
+      EXPECT_DOUBLE_EQ(v, 1) << "corner " << t;
+      EXPECT_LT(after, 1) << "corner " << t;
+    }
+  }
+}
+
 TEST(Waveform, PulseDefaultsFollowNgspice) {
   // TR = TF = TSTEP when omitted or zero; PW = PER = TSTOP.
   SourceFunction f({Shape::pulse, {0, 1, 0, 0}}, 0, run, "v1");
   EXPECT_DOUBLE_EQ(f.value(0.5e-6), 0.5);
   EXPECT_DOUBLE_EQ(f.value(0.5e-3), 1);
   EXPECT_DOUBLE_EQ(f.next_corner(0), 1e-6);
-  EXPECT_DOUBLE_EQ(f.next_corner(1e-6), 1e-6 + 1e-3);
+  // TR + PW > PER: the pulse restarts at the period's end, as ngspice's fmod(t - TD, PER) does.
+  EXPECT_DOUBLE_EQ(f.next_corner(1e-6), 1e-3);
 }
 
 TEST(Waveform, PulseCountStopsRepeating) {

@@ -215,6 +215,14 @@ int run_command(const CommandOptions& options) {
   };
 
   const mna::Start start = mna::find_start(*model, 0, setup.uic, setup.integrator);
+  try {
+    mna::check_mode_structure(*model, setup.uic ? mna::StartKind::initial_conditions : mna::StartKind::operating_point,
+                              start.p);
+  } catch (const mna::ModelError& e) {
+    waveforms.finish();
+    print_error(e.what());
+    return bad_input;
+  }
   if (!start.ok) return fail(0, "no initial operating point: " + start.message, start.worst_unknown);
   if (!integrator.initialize(0, start.x, start.p))
     return fail(0, integrator.failure().reason, integrator.failure().unknown);

@@ -142,6 +142,9 @@ class Device {
   virtual void declare(Stamper& stamper) = 0;
   virtual void load(Evaluation& e) const = 0;
   virtual void edges(std::vector<Edge>& out) const = 0;
+  // The connections in one mode (predicates p): an ideal switch or diode is a voltage-defined
+  // branch when closed with RON = 0 and no connection when open with ROFF = infinite.
+  virtual void mode_edges(const padae::Predicates& p, std::vector<Edge>& out) const { (void)p, edges(out); }
 
   // Predicates, numbered from first_predicate() in the model's vector.
   virtual int predicate_count() const { return 0; }

@@ -256,6 +256,12 @@ std::vector<Edge> Model::edges() const {
   return all;
 }
 
+std::vector<Edge> Model::edges(const padae::Predicates& p) const {
+  std::vector<Edge> all;
+  for (const auto& d : devices_) d->mode_edges(p, all);
+  return all;
+}
+
 }  // namespace mna
 
 namespace mna {

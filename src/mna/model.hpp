@@ -63,8 +63,9 @@ class Model final : public padae::System {
   double stored_energy(const Vector& x) const;
   double jump_dissipation(const padae::EventRecord& event) const;
 
-  // Connections of every device, for the structural checks.
+  // Connections of every device, for the structural checks: in any mode, or in mode p.
   std::vector<Edge> edges() const;
+  std::vector<Edge> edges(const padae::Predicates& p) const;
 
  private:
   void hold_rows(const Vector& x, padae::Load& out) const;

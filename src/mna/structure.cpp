@@ -54,13 +54,10 @@ std::vector<std::string> path_elements(const std::vector<Edge>& edges, int verti
   return names;
 }
 
-}  // namespace
-
-void check_structure(const Model& model, StartKind start) {
+void check_edges(const Model& model, StartKind start, std::vector<Edge> edges, const std::string& context) {
   const Unknowns& unknowns = model.unknowns();
   const int n = unknowns.size();
   const int ground_vertex = n;  // vertices: unknown indices (only nodes used), plus ground
-  std::vector<Edge> edges = model.edges();
   for (Edge& e : edges) {
     if (e.a == ground) e.a = ground_vertex;
     if (e.b == ground) e.b = ground_vertex;
@@ -79,8 +76,8 @@ void check_structure(const Model& model, StartKind start) {
     if (!loops.join(e.a, e.b)) {
       std::vector<std::string> loop = path_elements(forest, n + 1, e.a, e.b);
       loop.push_back(e.element);
-      throw ModelError("loop of voltage sources" + std::string(dc ? " and inductors" : "") + ": " + join_names(loop) +
-                       " (the currents around it are undetermined)");
+      throw ModelError(context + "loop of voltage sources" + std::string(dc ? " and inductors" : "") + ": " +
+                       join_names(loop) + " (the currents around it are undetermined)");
     }
     forest.push_back(e);
   }
@@ -103,12 +100,20 @@ void check_structure(const Model& model, StartKind start) {
       const bool crosses = (paths.find(e.a) == root) != (paths.find(e.b) == root);
       if (crosses && std::find(cut.begin(), cut.end(), e.element) == cut.end()) cut.push_back(e.element);
     }
-    std::string message = (dc ? "no DC path to ground from node(s) " : "no path to ground from node(s) ") + join_names(nodes);
+    std::string message = context + (dc ? "no DC path to ground from node(s) " : "no path to ground from node(s) ") + join_names(nodes);
     if (!cut.empty()) message += "; only " + join_names(cut) + " connect them to the rest (a cut-set of " +
                                  (dc ? "current sources and capacitors" : "current sources") + ")";
     if (dc) message += "; add a resistance to ground, or start from initial conditions (uic)";
     throw ModelError(message);
   }
+}
+
+}  // namespace
+
+void check_structure(const Model& model, StartKind start) { check_edges(model, start, model.edges(), ""); }
+
+void check_mode_structure(const Model& model, StartKind start, const padae::Predicates& mode) {
+  check_edges(model, start, model.edges(mode), "with the initial switch and diode states: ");
 }
 
 }  // namespace mna

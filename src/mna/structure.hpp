@@ -21,4 +21,9 @@ enum class StartKind {
 // loop of voltage sources is only found when it happens (the integrator reports it).
 void check_structure(const Model& model, StartKind start);
 
+// The same checks in one mode (the start's switch and diode states): closed RON = 0 switches
+// and diodes count as voltage sources, open ROFF = infinite ones as no connection, so a loop
+// they close or a node they isolate is reported before the run.
+void check_mode_structure(const Model& model, StartKind start, const padae::Predicates& mode);
+
 }  // namespace mna

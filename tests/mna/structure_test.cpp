@@ -68,6 +68,41 @@ TEST(Structure, InductorAcrossVoltageSourceOnlyAtDc) {
   EXPECT_EQ(structure_error(c, StartKind::initial_conditions), "");
 }
 
+TEST(Structure, ClosedIdealSwitchClosingALoopOfSourcesInTheStartMode) {
+  CircuitSpec c;
+  c.add("v1", {"a", "0"}, 1);
+  c.add("v2", {"b", "0"}, 2);
+  c.add("vc", {"ctl", "0"}, 1);
+  auto& s = c.add("s1", {"a", "b", "ctl", "0"});
+  s.model = {{"ron", 0.0}, {"vt", 0.5}};
+  Model m(c, {});
+  EXPECT_NO_THROW(check_structure(m, StartKind::initial_conditions));
+  try {
+    check_mode_structure(m, StartKind::initial_conditions, {1});
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    const std::string error = e.what();
+    EXPECT_NE(error.find("with the initial switch and diode states: loop of voltage sources"), std::string::npos) << error;
+    EXPECT_NE(error.find("s1"), std::string::npos) << error;
+  }
+  EXPECT_NO_THROW(check_mode_structure(m, StartKind::initial_conditions, {0}));
+}
+
+TEST(Structure, OpenIdealSwitchIsolatingACurrentSource) {
+  CircuitSpec c;
+  c.add("i1", {"0", "m"}, 1e-3);
+  c.add("vc", {"ctl", "0"}, 0);
+  c.add("s1", {"m", "0", "ctl", "0"}).model = {{"roff", infinity}, {"vt", 0.5}};
+  Model m(c, {});
+  EXPECT_NO_THROW(check_structure(m, StartKind::initial_conditions));
+  try {
+    check_mode_structure(m, StartKind::initial_conditions, {0});
+    FAIL() << "no error";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("no path to ground from node(s) m; only i1"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Structure, ModelErrorsNameTheElement) {
   CircuitSpec c;
   c.add("f1", {"a", "0"}, 1).controls = {"vmissing"};

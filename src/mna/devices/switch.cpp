@@ -66,6 +66,11 @@ class Switch final : public Device {
     e.df(slot_branch_a_, alpha), e.df(slot_branch_b_, -alpha), e.df(slot_branch_branch_, -beta);
   }
   void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::conductive, name()}); }
+  void mode_edges(const padae::Predicates& p, std::vector<Edge>& out) const override {
+    const double r = p[first_predicate()] ? on_resistance_ : off_resistance_;
+    if (r == 0) out.push_back({a_, b_, Connection::voltage_defined, name()});
+    else if (!std::isinf(r)) out.push_back({a_, b_, Connection::conductive, name()});
+  }
 
   int predicate_count() const override { return 1; }
   std::string predicate_label(int) const override { return "on"; }

@@ -38,6 +38,7 @@ struct ElementSpec {
 struct CircuitSpec {
   std::vector<ElementSpec> elements;
   std::map<std::string, double> initial_voltages;  // .ic v(node)=value, lower-case node names
+  std::map<std::string, double> nodesets;          // .nodeset v(node)=value: operating-point guesses
 
   ElementSpec& add(std::string name, std::vector<std::string> nodes, double value = 0) {
     // The type is the name's first letter, as on a SPICE card.

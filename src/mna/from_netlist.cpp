@@ -74,6 +74,11 @@ CircuitSpec circuit_from_netlist(const netlist::FlatCircuit& flat) {
       throw ModelError(".ic v(" + ic.node + ", " + ic.reference + "): only node-to-ground initial voltages are supported");
     circuit.initial_voltages[ic.node] = ic.value;
   }
+  for (const auto& guess : flat.nodesets) {
+    if (!guess.reference.empty() && guess.reference != "0")
+      throw ModelError(".nodeset v(" + guess.node + ", " + guess.reference + "): only node-to-ground guesses are supported");
+    circuit.nodesets[guess.node] = guess.value;
+  }
   return circuit;
 }
 

@@ -119,6 +119,11 @@ Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
     if (n == -2) throw ModelError(".ic names node '" + name + "', which is not in the circuit");
     if (n != ground) held_nodes_[n] = value;
   }
+  for (const auto& [name, value] : circuit.nodesets) {
+    const int n = find_node(name);
+    if (n == -2) throw ModelError(".nodeset names node '" + name + "', which is not in the circuit");
+    if (n != ground) nodesets_[n] = value;
+  }
   // Held rows become v - v_ic = 0: their diagonal must exist (it always does, see Pattern).
   pattern_ = stamper.build_pattern(size());
 
@@ -227,6 +232,13 @@ Vector Model::initial_conditions() const {
   for (const auto& d : devices_) d->initial_condition(x0);
   for (const auto& [n, value] : held_nodes_) x0[n] = value;
   return x0;
+}
+
+Vector Model::operating_point_guess() const {
+  Vector x = initial_conditions();
+  for (const auto& [n, value] : nodesets_)
+    if (!held_nodes_.contains(n)) x[n] = value;
+  return x;
 }
 
 padae::Predicates Model::initial_predicates(double t, const Vector& x) const {

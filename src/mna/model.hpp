@@ -54,6 +54,8 @@ class Model final : public padae::System {
   // Predicates at (t, x) from the guards, except that a predicate an auxiliary mode follows
   // (a switch's state, an ideal diode's mode) starts equal to that mode.
   padae::Predicates initial_predicates(double t, const Vector& x) const;
+  // initial_conditions() with the .nodeset voltages: where the operating point's Newton starts.
+  Vector operating_point_guess() const;
   // The .ic node voltages: held fixed while computing the operating point (as ngspice does).
   const std::map<int, double>& held_nodes() const { return held_nodes_; }
   void hold_initial_voltages(bool hold) { holding_ = hold; }
@@ -79,6 +81,7 @@ class Model final : public padae::System {
   int predicate_count_ = 0;
   Tolerances tolerances_;
   std::map<int, double> held_nodes_;
+  std::map<int, double> nodesets_;
   std::vector<std::vector<int>> held_row_slots_;  // value positions in each held row
   std::vector<int> held_diagonal_slots_;
   bool holding_ = false;

@@ -6,7 +6,7 @@ namespace mna {
 
 Start find_start(Model& model, double t0, bool use_initial_conditions, const padae::Options& options) {
   Start start;
-  start.x = model.initial_conditions();
+  start.x = use_initial_conditions ? model.initial_conditions() : model.operating_point_guess();
   start.p = model.initial_predicates(t0, start.x);
   if (use_initial_conditions) {
     start.ok = true;

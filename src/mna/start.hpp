@@ -18,7 +18,8 @@ struct Start {
 
 // Without uic: the DC operating point at t0 (sources at their t0 values, as ngspice's transient
 // op does) with the predicates iterated to a fixed point; .ic node voltages are held during it
-// (ngspice's semantics) and released for the transient. Switch ON/OFF seeds the modes.
+// (ngspice's semantics) and released for the transient; .nodeset voltages are where Newton
+// starts. Switch ON/OFF seeds the modes.
 // With uic: x0 from IC= and .ic (everything else 0), modes from ON/OFF; the integrator's
 // initialization then makes it consistent (algebraic unknowns solved, charges kept).
 Start find_start(Model& model, double t0, bool use_initial_conditions, const padae::Options& options);

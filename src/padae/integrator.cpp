@@ -56,6 +56,20 @@ double weighted_max_norm(const Vector& v, const Vector& inverse_weight, int* wor
   return largest;
 }
 
+// Over the entries that have a weight (the others are not tested).
+double weighted_norm(const Vector& v, const Vector& inverse_weight, ErrorNorm kind) {
+  if (kind == ErrorNorm::max) return weighted_max_norm(v, inverse_weight);
+  double sum = 0;
+  int count = 0;
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    if (inverse_weight[i] == 0) continue;
+    double scaled = v[i] * inverse_weight[i];
+    sum += scaled * scaled;
+    ++count;
+  }
+  return count > 0 ? std::sqrt(sum / count) : 0.0;
+}
+
 std::string format_time(double t) {
   std::ostringstream text;
   text.precision(17);
@@ -264,7 +278,7 @@ Integrator::Impl::Correction Integrator::Impl::correct(double t_new, Newton mode
     newton.solve(delta);
     if (cj_ratio != 1.0) delta *= 2.0 / (1.0 + cj_ratio);  // compensates the stale cj
     x_new -= delta;
-    double norm = weighted_max_norm(delta, inverse_weight_x);
+    double norm = weighted_norm(delta, inverse_weight_x, options.norm);
     if (!std::isfinite(norm)) return Correction::diverged;
     bool converged = false;
     if (mode == Newton::full) {
@@ -298,18 +312,18 @@ Integrator::Impl::Correction Integrator::Impl::correct(double t_new, Newton mode
 // k-1 and k-2 that decide whether to lower the order.
 bool Integrator::Impl::error_test(double& error_k, double& error_k_minus_1, int& order_new) {
   correction_q = q_new - q_predicted;
-  double norm_k = weighted_max_norm(correction_q, inverse_weight_q);
+  double norm_k = weighted_norm(correction_q, inverse_weight_q, options.norm);
   error_k = sigma[order] * norm_k;
   double terr_k = (order + 1) * error_k;
   order_new = order;
   error_k_minus_1 = 0;
   if (order > 1) {
     Vector lower = phi_q[order] + correction_q;
-    error_k_minus_1 = sigma[order - 1] * weighted_max_norm(lower, inverse_weight_q);
+    error_k_minus_1 = sigma[order - 1] * weighted_norm(lower, inverse_weight_q, options.norm);
     double terr_k_minus_1 = order * error_k_minus_1;
     if (order > 2) {
       lower += phi_q[order - 1];
-      double terr_k_minus_2 = (order - 1) * sigma[order - 2] * weighted_max_norm(lower, inverse_weight_q);
+      double terr_k_minus_2 = (order - 1) * sigma[order - 2] * weighted_norm(lower, inverse_weight_q, options.norm);
       if (std::max(terr_k_minus_1, terr_k_minus_2) <= terr_k) order_new = order - 1;
     } else if (terr_k_minus_1 <= 0.5 * terr_k) {
       order_new = order - 1;
@@ -344,7 +358,7 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
       action = maintain;
     } else {
       Vector above = correction_q - phi_q[order + 1];
-      error_k_plus_1 = weighted_max_norm(above, inverse_weight_q) / (order + 2);
+      error_k_plus_1 = weighted_norm(above, inverse_weight_q, options.norm) / (order + 2);
       double terr_k = (order + 1) * error_k;
       double terr_k_plus_1 = (order + 2) * error_k_plus_1;
       if (order == 1) {
@@ -616,7 +630,7 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   double h_new = h > 0 ? h : (options.initial_step > 0 ? options.initial_step : 1e-3 * options.time_scale);
   if (h <= 0 && options.initial_step <= 0) {
     // IDA's initial step: the first-order change over the step is at most half a tolerance.
-    double rate = weighted_max_norm(consistent.q_derivative, inverse_weight_q);
+    double rate = weighted_norm(consistent.q_derivative, inverse_weight_q, options.norm);
     if (h_new * rate > 0.5) h_new = 0.5 / rate;
   }
   if (options.max_step > 0) h_new = std::min(h_new, options.max_step);

@@ -22,9 +22,14 @@
 
 namespace padae {
 
+// How the weighted errors of several unknowns combine: root-mean-square (IDA's, the default)
+// or the largest (every quantity held to its tolerance individually; stricter on large circuits).
+enum class ErrorNorm { rms, max };
+
 struct Options {
   double rtol = 1e-4;
   double atol = 1e-6;              // default absolute tolerance, see System::absolute_tolerance
+  ErrorNorm norm = ErrorNorm::rms;
   int max_order = 5;
   double initial_step = 0.0;       // 0: chosen from the tolerances
   double max_step = 0.0;           // 0: unlimited

@@ -42,7 +42,9 @@ TEST(Events, AnEventAtTheInitialTime) {
   Integrator integrator(model, precise());
   ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
   ASSERT_TRUE(run_until(integrator, 1.0, [&](const StepOutcome& outcome) {
-    if (outcome.kind == StepKind::event) EXPECT_LT(outcome.t, 1e-12);
+    if (outcome.kind == StepKind::event) {
+      EXPECT_LT(outcome.t, 1e-12);
+    }
   })) << integrator.failure().reason;
   EXPECT_EQ(integrator.predicates()[0], 1);
   EXPECT_NEAR(integrator.state()[0], 2.0, 1e-9);

@@ -213,6 +213,14 @@ int run_command(const CommandOptions& options) {
   auto emit = [&](double t, const mna::Vector& x) {
     if (t >= setup.tstart) waveforms.row(t, x);
   };
+  // --grid: rows at tstart + k TSTEP strictly inside the last accepted step, from its polynomial
+  // (after a restart at a corner or an event the polynomial is gone: those steps get none).
+  auto grid_point = [&](long k) { return setup.tstart + static_cast<double>(k) * setup.settings.tstep; };
+  long next_grid = 0;
+  auto emit_grid = [&](double t_before, double t_after) {
+    while (grid_point(next_grid) <= t_before) ++next_grid;
+    for (; grid_point(next_grid) < t_after; ++next_grid) emit(grid_point(next_grid), integrator.interpolate(grid_point(next_grid)));
+  };
 
   const mna::Start start = mna::find_start(*model, 0, setup.uic, setup.integrator);
   try {
@@ -229,6 +237,7 @@ int run_command(const CommandOptions& options) {
   emit(0, integrator.state());
 
   while (integrator.time() < t_end) {
+    const double t_before = integrator.time();
     const padae::StepOutcome outcome = integrator.step(t_end);
     switch (outcome.kind) {
       case padae::StepKind::failed:
@@ -242,6 +251,9 @@ int run_command(const CommandOptions& options) {
         break;
       }
       case padae::StepKind::accepted:
+        if (options.grid) emit_grid(t_before, outcome.t);
+        emit(outcome.t, integrator.state());
+        break;
       case padae::StepKind::time_event:
       case padae::StepKind::stop: emit(outcome.t, integrator.state()); break;
     }

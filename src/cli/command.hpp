@@ -18,6 +18,7 @@ struct CommandOptions {
   bool raw_ascii = false;
   std::string plot;           // PNG
   bool quiet = false;
+  bool grid = false;          // also rows on the .tran TSTEP grid, interpolated within steps
 };
 
 // Exit codes of the command.

@@ -41,6 +41,9 @@ int main(int argc, char** argv) {
   app.add_flag("--ascii", options.raw_ascii, "write the raw file in ascii");
   app.add_option("--plot", options.plot, "PNG of the probed signals (gnuplot)");
   app.add_flag("-q,--quiet", options.quiet, "no warnings, no progress line");
+  app.add_flag("--grid", options.grid,
+               "also write rows on the .tran TSTEP grid, from the integrator's interpolating polynomial "
+               "(steps that end at a source corner or an event keep only their end rows)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

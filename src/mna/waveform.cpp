@@ -27,16 +27,17 @@ std::vector<double> with_defaults(Waveform::Shape shape, std::vector<double> p, 
     case Waveform::Shape::pulse:
       fill(8, 2);
       if (!given(2)) p[2] = 0;
-      // ngspice: a zero or omitted rise/fall time means TSTEP; width and period default to TSTOP.
+      // ngspice (vsrcload.c): a zero or omitted rise/fall time means TSTEP, a zero or omitted
+      // width or period TSTOP.
       if (!given(3) || p[3] == 0) p[3] = tstep;
       if (!given(4) || p[4] == 0) p[4] = tstep;
-      if (!given(5)) p[5] = run.tstop;
+      if (!given(5) || p[5] == 0) p[5] = run.tstop;
       if (!given(6) || p[6] == 0) p[6] = run.tstop;
       if (!given(7)) p[7] = 0;  // number of pulses, 0: unlimited
       break;
     case Waveform::Shape::sine:
       fill(6, 2);
-      if (!given(2)) p[2] = run.tstop > 0 ? 1 / run.tstop : 0;
+      if (!given(2) || p[2] == 0) p[2] = run.tstop > 0 ? 1 / run.tstop : 0;
       for (int i : {3, 4, 5})
         if (!given(i)) p[i] = 0;
       break;

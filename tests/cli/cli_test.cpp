@@ -182,6 +182,24 @@ TEST_F(Cli, BadInputExitsWithTwo) {
   EXPECT_NE(r.err.find("loop of voltage sources"), std::string::npos) << r.err;
 }
 
+TEST_F(Cli, GridAddsInterpolatedRowsOnTheTstepGrid) {
+  const Result plain = run(write("rc.cir", rc_netlist) + " --rtol 1e-6");
+  const Result r = run(write("rc.cir", rc_netlist) + " --rtol 1e-6 --grid");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv steps = parse_csv(plain.out), csv = parse_csv(r.out);
+  EXPECT_GE(csv.rows.size(), 500u);  // 5 ms / 10 us, plus the steps
+  std::size_t on_grid = 0;
+  for (std::size_t k = 0; k < csv.rows.size(); ++k) {
+    const double t = csv.rows[k][0];
+    if (k > 0) EXPECT_GT(t, csv.rows[k - 1][0]);
+    const double n = std::round(t / 10e-6);
+    if (std::abs(t - n * 10e-6) < 1e-15) ++on_grid;
+    EXPECT_NEAR(csv.rows[k][2], 1 - std::exp(-t / 1e-3), 1e-4) << "t = " << t;  // interpolated rows too
+  }
+  EXPECT_GE(on_grid, 450u);
+  EXPECT_GT(csv.rows.size(), steps.rows.size());
+}
+
 TEST_F(Cli, TstopOverridesTheNetlist) {
   const Result r = run(write("rc.cir", rc_netlist) + " --tstop 1m");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -32,7 +32,7 @@ TEST(Waveform, PulseRampsHoldsAndRepeats) {
 TEST(Waveform, PulseCornersAgreeWithValuesAfterManyPeriods) {
   // A triangle: every period starts at -1 exactly on the corner the integrator lands on, and
   // rises right after it (floating-point period arithmetic must not put the kink a few ulps off).
-  SourceFunction f({Shape::pulse, {-1, 1, 0, 50e-6, 50e-6, 0, 100e-6}}, 0, run, "vtri");
+  SourceFunction f({Shape::pulse, {-1, 1, 0, 50e-6, 50e-6, 1e-15, 100e-6}}, 0, run, "vtri");
   for (double t = f.next_corner(0); t < 10e-3; t = f.next_corner(t)) {
     const double v = f.value(t), after = f.value(t + 1e-12);
     if (v < 0) {
@@ -43,6 +43,15 @@ TEST(Waveform, PulseCornersAgreeWithValuesAfterManyPeriods) {
       EXPECT_LT(after, 1) << "corner " << t;
     }
   }
+}
+
+TEST(Waveform, ZeroPulseWidthMeansTstopAsInNgspice) {
+  // PULSE(-1 1 0 50u 50u 0 100u) is no triangle in ngspice: PW = 0 becomes TSTOP, so the
+  // level stays high until the period restarts.
+  SourceFunction f({Shape::pulse, {-1, 1, 0, 50e-6, 50e-6, 0, 100e-6}}, 0, run, "vtri");
+  EXPECT_DOUBLE_EQ(f.value(75e-6), 1);
+  EXPECT_DOUBLE_EQ(f.value(100e-6), -1);
+  EXPECT_DOUBLE_EQ(f.next_corner(50e-6), 100e-6);
 }
 
 TEST(Waveform, PulseDefaultsFollowNgspice) {

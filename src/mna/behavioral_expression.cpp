@@ -92,10 +92,8 @@ int BehavioralExpression::compile_condition(const netlist::Expression& e, const 
 int BehavioralExpression::compile(const netlist::Expression& e, const Unknowns& unknowns) {
   auto fail = [&](const std::string& why) -> int { throw ModelError("B source '" + element_ + "': " + why); };
   auto node = [&](const std::string& name) {
-    for (int i = 0; i < unknowns.size(); ++i)
-      if (unknowns.category(i) == UnknownCategory::node_voltage && unknowns.owner(i) == name) return i;
-    if (name == "0" || name == "gnd") return ground;
-    return fail("node '" + name + "' is not in the circuit");
+    const int found = unknowns.find_node(name);
+    return found != -2 ? found : fail("node '" + name + "' is not in the circuit");
   };
 
   if (auto* n = std::get_if<netlist::Number>(&e.node)) return constant(n->value);

@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "mna/circuit_spec.hpp"
@@ -34,6 +35,8 @@ class Unknowns {
  public:
   // Index of a circuit node, created on first use; ground for "0" and "gnd".
   int node(const std::string& name);
+  // Index of an existing circuit node, ground, or -2 when there is no such node.
+  int find_node(const std::string& name) const;
   int add(std::string label, UnknownCategory category, std::string owner);
   // Index of the branch current of `element` (V, L, E, H, B with V=, ideal switch or diode).
   int branch(const std::string& element) const;
@@ -48,6 +51,7 @@ class Unknowns {
   std::vector<std::string> labels_;
   std::vector<UnknownCategory> categories_;
   std::vector<std::string> owners_;
+  std::unordered_map<std::string, int> nodes_, branches_;
 };
 
 // Collects the Jacobian entries of all devices; once the pattern exists, every declared slot

@@ -9,29 +9,29 @@ namespace mna {
 // ---- Unknowns -------------------------------------------------------------------------------
 
 int Unknowns::node(const std::string& name) {
+  const int found = find_node(name);
+  return found != -2 ? found : add("v(" + name + ")", UnknownCategory::node_voltage, name);
+}
+
+int Unknowns::find_node(const std::string& name) const {
   if (name == "0" || name == "gnd") return ground;
-  const std::string label = "v(" + name + ")";
-  for (int i = 0; i < size(); ++i)
-    if (categories_[i] == UnknownCategory::node_voltage && owners_[i] == name) return i;
-  return add(label, UnknownCategory::node_voltage, name);
+  auto it = nodes_.find(name);
+  return it == nodes_.end() ? -2 : it->second;
 }
 
 int Unknowns::add(std::string label, UnknownCategory category, std::string owner) {
+  if (category == UnknownCategory::node_voltage) nodes_.emplace(owner, size());
+  if (category == UnknownCategory::branch_current) branches_.emplace(owner, size());
   labels_.push_back(std::move(label));
   categories_.push_back(category);
   owners_.push_back(std::move(owner));
   return size() - 1;
 }
 
-bool Unknowns::has_branch(const std::string& element) const {
-  for (int i = 0; i < size(); ++i)
-    if (categories_[i] == UnknownCategory::branch_current && owners_[i] == element) return true;
-  return false;
-}
+bool Unknowns::has_branch(const std::string& element) const { return branches_.contains(element); }
 
 int Unknowns::branch(const std::string& element) const {
-  for (int i = 0; i < size(); ++i)
-    if (categories_[i] == UnknownCategory::branch_current && owners_[i] == element) return i;
+  if (auto it = branches_.find(element); it != branches_.end()) return it->second;
   throw ModelError("element '" + element +
                    "' has no branch current (the controlling element must be a voltage source, "
                    "inductor or other element with a current unknown)");
@@ -204,18 +204,7 @@ double Model::absolute_tolerance(int unknown, double) const {
   return tolerances_.voltage;
 }
 
-const Device* Model::device(const std::string& name) const {
-  for (const auto& d : devices_)
-    if (d->name() == name) return d.get();
-  return nullptr;
-}
-
-int Model::find_node(const std::string& name) const {
-  if (name == "0" || name == "gnd") return ground;
-  for (int i = 0; i < size(); ++i)
-    if (unknowns_.category(i) == UnknownCategory::node_voltage && unknowns_.owner(i) == name) return i;
-  return -2;
-}
+int Model::find_node(const std::string& name) const { return unknowns_.find_node(name); }
 
 const Device& Model::predicate_owner(int predicate) const {
   return *devices_.at(predicate_owners_.at(predicate));

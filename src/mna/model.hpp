@@ -40,7 +40,6 @@ class Model final : public padae::System {
   void set_tolerances(const Tolerances& tolerances) { tolerances_ = tolerances; }
   const Unknowns& unknowns() const { return unknowns_; }
   const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }
-  const Device* device(const std::string& name) const;
   // Node index or ground; -2 when the circuit has no such node.
   int find_node(const std::string& name) const;
 
@@ -56,8 +55,7 @@ class Model final : public padae::System {
   padae::Predicates initial_predicates(double t, const Vector& x) const;
   // initial_conditions() with the .nodeset voltages: where the operating point's Newton starts.
   Vector operating_point_guess() const;
-  // The .ic node voltages: held fixed while computing the operating point (as ngspice does).
-  const std::map<int, double>& held_nodes() const { return held_nodes_; }
+  // While set, the .ic node voltages are held fixed (the operating point, as ngspice does).
   void hold_initial_voltages(bool hold) { holding_ = hold; }
 
   // Energy in capacitors and inductors at x; energy a jump dissipated (stored before + delivered

@@ -222,42 +222,51 @@ int run_command(const CommandOptions& options) {
     for (; grid_point(next_grid) < t_after; ++next_grid) emit(grid_point(next_grid), integrator.interpolate(grid_point(next_grid)));
   };
 
-  const mna::Start start = mna::find_start(*model, 0, setup.uic, setup.integrator);
+  // A writer failing mid-run (disk full) ends the run like a simulation failure (exit 1): what
+  // was written is kept.
   try {
-    mna::check_mode_structure(*model, setup.uic ? mna::StartKind::initial_conditions : mna::StartKind::operating_point,
-                              start.p);
-  } catch (const mna::ModelError& e) {
-    waveforms.finish();
-    print_error(e.what());
-    return bad_input;
-  }
-  if (!start.ok) return fail(0, "no initial operating point: " + start.message, start.worst_unknown);
-  if (!integrator.initialize(0, start.x, start.p))
-    return fail(0, integrator.failure().reason, integrator.failure().unknown);
-  emit(0, integrator.state());
-
-  while (integrator.time() < t_end) {
-    const double t_before = integrator.time();
-    const padae::StepOutcome outcome = integrator.step(t_end);
-    switch (outcome.kind) {
-      case padae::StepKind::failed:
-        return fail(integrator.failure().t, integrator.failure().reason, integrator.failure().unknown);
-      case padae::StepKind::event: {
-        // Two rows at a discontinuity: the state just before and just after it.
-        const padae::EventRecord& event = integrator.last_event();
-        if (waveforms.differ(event.x_before, integrator.state())) emit(outcome.t, event.x_before);
-        emit(outcome.t, integrator.state());
-        if (event_log) event_log->write(*model, event, event.jumped ? model->jump_dissipation(event) : 0.0);
-        break;
-      }
-      case padae::StepKind::accepted:
-        if (options.grid) emit_grid(t_before, outcome.t);
-        emit(outcome.t, integrator.state());
-        break;
-      case padae::StepKind::time_event:
-      case padae::StepKind::stop: emit(outcome.t, integrator.state()); break;
+    const mna::Start start = mna::find_start(*model, 0, setup.uic, setup.integrator);
+    try {
+      mna::check_mode_structure(*model, setup.uic ? mna::StartKind::initial_conditions : mna::StartKind::operating_point,
+                                start.p);
+    } catch (const mna::ModelError& e) {
+      waveforms.finish();
+      print_error(e.what());
+      return bad_input;
     }
-    progress.update(outcome.t);
+    if (!start.ok) return fail(0, "no initial operating point: " + start.message, start.worst_unknown);
+    if (!integrator.initialize(0, start.x, start.p))
+      return fail(0, integrator.failure().reason, integrator.failure().unknown);
+    emit(0, integrator.state());
+
+    while (integrator.time() < t_end) {
+      const double t_before = integrator.time();
+      const padae::StepOutcome outcome = integrator.step(t_end);
+      switch (outcome.kind) {
+        case padae::StepKind::failed:
+          return fail(integrator.failure().t, integrator.failure().reason, integrator.failure().unknown);
+        case padae::StepKind::event: {
+          // Two rows at a discontinuity: the state just before and just after it.
+          const padae::EventRecord& event = integrator.last_event();
+          if (waveforms.differ(event.x_before, integrator.state())) emit(outcome.t, event.x_before);
+          emit(outcome.t, integrator.state());
+          if (event_log) event_log->write(*model, event, event.jumped ? model->jump_dissipation(event) : 0.0);
+          break;
+        }
+        case padae::StepKind::accepted:
+          if (options.grid) emit_grid(t_before, outcome.t);
+          emit(outcome.t, integrator.state());
+          break;
+        case padae::StepKind::time_event:
+        case padae::StepKind::stop: emit(outcome.t, integrator.state()); break;
+      }
+      progress.update(outcome.t);
+    }
+  } catch (const std::exception& e) {
+    progress.clear();
+    waveforms.finish();
+    print_error(fmt::format("stopped at t = {:.9g} s: {}", integrator.time(), e.what()));
+    return simulation_failure;
   }
   progress.clear();
   waveforms.finish();
@@ -267,7 +276,7 @@ int run_command(const CommandOptions& options) {
     std::string error;
     if (!output::plot_png(plot_csv, options.plot, error)) {
       print_error("plot: " + error);
-      status = bad_input;
+      status = simulation_failure;  // the waveform is complete, but not every requested output
     }
   }
   if (!temporary_csv.empty()) std::filesystem::remove(temporary_csv);

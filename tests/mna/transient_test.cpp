@@ -224,14 +224,15 @@ TEST(Jump, OpeningSwitchPutsInductorsInSeriesConservingFlux) {
 TEST(Jump, InductorFreewheelsThroughIdealDiodeWhenSwitchOpens) {
   // V charges L through R while the switch is on; when it opens the current moves to the
   // freewheeling diode without a jump, then decays with L/R.
-  // The diode has a finite ROFF: with ROFF infinite the open-switch, diode-off mode makes the
-  // current jump to 0 with v(a) = 0 after it, so the diode's guard never sees the (impulsive)
-  // voltage that should turn it on; that needs padae to judge guards on the jump's impulse.
   const double vs = 10, r = 5, l = 10e-3;
   CircuitSpec c;
   ramp_control(c, 1, 0);
   c.add("v1", {"s", "0"}, vs);
   ideal_switch(c, "s1", "s", "a", true);
+  // ROFF finite: with both the switch and the diode open ideally (ROFF = infinite) the new mode
+  // makes the current jump to 0 and v(a) = 0 after it, and the diode's guard never sees the
+  // impulsive voltage that should have turned it on (padae would have to judge the guards on
+  // the jump's impulse).
   c.add("d1", {"0", "a"}).model = {{"ideal", 1}, {"roff", 1e9}};
   c.add("l1", {"a", "b"}, l).initial_condition = 0.0;
   c.add("r1", {"b", "0"}, r);

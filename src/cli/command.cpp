@@ -24,28 +24,18 @@ using Clock = std::chrono::steady_clock;
 
 void print_error(const std::string& message) { fmt::print(stderr, "padsim: error: {}\n", message); }
 
-// What the run needs from the netlist and the command line.
-struct RunSetup {
-  netlist::FlatCircuit flat;
-  mna::CircuitSpec circuit;
-  mna::RunSettings settings;
-  double tstart = 0;
-  bool uic = false;
-  padae::Options integrator;
-  mna::Tolerances tolerances;
-};
-
 // .options reltol, abstol (currents), vntol (voltages), as ngspice names them; the command line
 // overrides. --atol sets the absolute tolerance of every unknown.
-void apply_tolerances(const netlist::FlatCircuit& flat, const CommandOptions& options, RunSetup& setup) {
+void apply_tolerances(const netlist::FlatCircuit& flat, const CommandOptions& options, padae::Options& integrator,
+                      mna::Tolerances& tolerances) {
   auto option = [&](const char* name, double fallback) {
     const netlist::Option* o = flat.find_option(name);
     return o && o->number ? *o->number : fallback;
   };
-  setup.integrator.rtol = options.rtol.value_or(option("reltol", 1e-3));
-  setup.tolerances.current = options.atol.value_or(option("abstol", 1e-12));
-  setup.tolerances.voltage = options.atol.value_or(option("vntol", 1e-6));
-  setup.integrator.atol = setup.tolerances.voltage;
+  integrator.rtol = options.rtol.value_or(option("reltol", 1e-3));
+  tolerances.current = options.atol.value_or(option("abstol", 1e-12));
+  tolerances.voltage = options.atol.value_or(option("vntol", 1e-6));
+  integrator.atol = tolerances.voltage;
 }
 
 // One CSV column set, written to every requested waveform writer.
@@ -136,153 +126,181 @@ void print_statistics(const padae::Statistics& s, int unknowns, double wall) {
              s.jacobians, s.lu_factorizations, s.events, s.jumps, unknowns, wall);
 }
 
-}  // namespace
 
-int run_command(const CommandOptions& options) {
-  const auto wall_start = Clock::now();
-  // --- input: netlist, circuit, model, structure, columns (errors: exit 2) ---
-  netlist::Diagnostics diagnostics;
-  std::optional<netlist::FlatCircuit> flat = netlist::load(options.netlist, diagnostics);
-  for (const auto& d : diagnostics.all())
-    if (d.severity == netlist::Severity::error || !options.quiet) fmt::print(stderr, "{}", netlist::format(d));
-  if (!flat) return bad_input;
+// One run of the command, phase by phase; each phase returns an exit code (success: go on).
+class Session {
+ public:
+  explicit Session(const CommandOptions& options) : options_(options) {}
 
-  RunSetup setup;
-  if (!flat->tran && !options.tstop) {
-    print_error("the netlist has no .tran card (give --tstop)");
-    return bad_input;
-  }
-  setup.settings.tstop = options.tstop.value_or(flat->tran ? flat->tran->stop : 0);
-  setup.settings.tstep = flat->tran && flat->tran->step > 0 ? flat->tran->step : setup.settings.tstop / 50;
-  setup.tstart = flat->tran ? flat->tran->start : 0;
-  setup.uic = flat->tran && flat->tran->use_initial_conditions;
-  apply_tolerances(*flat, options, setup);
-  setup.integrator.time_scale = setup.settings.tstop;
-  if (flat->tran && flat->tran->max_step) setup.integrator.max_step = *flat->tran->max_step;
-
-  std::unique_ptr<mna::Model> model;
-  std::vector<Probe> probes;
-  try {
-    setup.circuit = mna::circuit_from_netlist(*flat);
-    model = std::make_unique<mna::Model>(setup.circuit, setup.settings);
-    model->set_tolerances(setup.tolerances);
-    mna::check_structure(*model, setup.uic ? mna::StartKind::initial_conditions : mna::StartKind::operating_point);
-    if (!options.probes.empty()) probes = parse_probes(options.probes, *model);
-    else if (!flat->saves.empty()) probes = requested_probes(flat->saves, *model, setup.circuit);
-    else probes = default_probes(*model, setup.circuit);
-  } catch (const mna::ModelError& e) {
-    print_error(e.what());
-    return bad_input;
-  }
-
-  // --- outputs (cannot open: exit 2) ---
-  Waveforms waveforms;
-  std::unique_ptr<EventLog> event_log;
-  std::string plot_csv = options.output;
-  std::filesystem::path temporary_csv;
-  try {
-    if (!options.plot.empty() && (options.output.empty() || options.output == "-")) {
-      // The plot reads a CSV file: write one next to the PNG's name when the CSV goes to stdout.
-      temporary_csv = std::filesystem::temp_directory_path() / fmt::format("padsim-{}.csv", getpid());
-      plot_csv = temporary_csv.string();
-      waveforms.add(output::make_csv_writer(plot_csv));
-      if (options.output == "-") waveforms.add(output::make_csv_writer("-"));
-    } else {
-      waveforms.add(output::make_csv_writer(options.output.empty() ? "-" : options.output));
+  // Netlist, .tran, model, structural checks, columns. Errors: exit 2.
+  int load() {
+    netlist::Diagnostics diagnostics;
+    std::optional<netlist::FlatCircuit> flat = netlist::load(options_.netlist, diagnostics);
+    for (const auto& d : diagnostics.all())
+      if (d.severity == netlist::Severity::error || !options_.quiet) fmt::print(stderr, "{}", netlist::format(d));
+    if (!flat) return bad_input;
+    if (!flat->tran && !options_.tstop) {
+      print_error("the netlist has no .tran card (give --tstop)");
+      return bad_input;
     }
-    if (!options.raw.empty()) waveforms.add(output::make_raw_writer(options.raw, !options.raw_ascii, flat->title));
-    if (!options.events.empty()) event_log = std::make_unique<EventLog>(options.events);
-    waveforms.begin(probes);
-  } catch (const std::exception& e) {
-    print_error(e.what());
-    return bad_input;
-  }
-
-  // --- the run (failure: exit 1, waveform so far kept) ---
-  const double t_end = setup.settings.tstop;
-  padae::Integrator integrator(*model, setup.integrator);
-  Progress progress(!options.quiet, t_end);
-  auto fail = [&](double t, const std::string& why, int unknown) {
-    progress.clear();
-    waveforms.finish();
-    print_error(fmt::format("simulation failed at t = {:.9g} s: {}{}", t, why, blame(*model, unknown)));
-    if (options.stats) print_statistics(integrator.statistics(), model->size(),
-                                        std::chrono::duration<double>(Clock::now() - wall_start).count());
-    return simulation_failure;
-  };
-  auto emit = [&](double t, const mna::Vector& x) {
-    if (t >= setup.tstart) waveforms.row(t, x);
-  };
-  // --grid: rows at tstart + k TSTEP strictly inside the last accepted step, from its polynomial
-  // (after a restart at a corner or an event the polynomial is gone: those steps get none).
-  auto grid_point = [&](long k) { return setup.tstart + static_cast<double>(k) * setup.settings.tstep; };
-  long next_grid = 0;
-  auto emit_grid = [&](double t_before, double t_after) {
-    while (grid_point(next_grid) <= t_before) ++next_grid;
-    for (; grid_point(next_grid) < t_after; ++next_grid) emit(grid_point(next_grid), integrator.interpolate(grid_point(next_grid)));
-  };
-
-  // A writer failing mid-run (disk full) ends the run like a simulation failure (exit 1): what
-  // was written is kept.
-  try {
-    const mna::Start start = mna::find_start(*model, 0, setup.uic, setup.integrator);
+    title_ = flat->title;
+    settings_.tstop = options_.tstop.value_or(flat->tran ? flat->tran->stop : 0);
+    settings_.tstep = flat->tran && flat->tran->step > 0 ? flat->tran->step : settings_.tstop / 50;
+    tstart_ = flat->tran ? flat->tran->start : 0;
+    uic_ = flat->tran && flat->tran->use_initial_conditions;
+    mna::Tolerances tolerances;
+    apply_tolerances(*flat, options_, integrator_options_, tolerances);
+    integrator_options_.time_scale = settings_.tstop;
+    if (flat->tran && flat->tran->max_step) integrator_options_.max_step = *flat->tran->max_step;
     try {
-      mna::check_mode_structure(*model, setup.uic ? mna::StartKind::initial_conditions : mna::StartKind::operating_point,
-                                start.p);
+      circuit_ = mna::circuit_from_netlist(*flat);
+      model_ = std::make_unique<mna::Model>(circuit_, settings_);
+      model_->set_tolerances(tolerances);
+      mna::check_structure(*model_, start_kind());
+      if (!options_.probes.empty()) probes_ = parse_probes(options_.probes, *model_);
+      else if (!flat->saves.empty()) probes_ = requested_probes(flat->saves, *model_, circuit_);
+      else probes_ = default_probes(*model_, circuit_);
     } catch (const mna::ModelError& e) {
-      waveforms.finish();
       print_error(e.what());
       return bad_input;
     }
-    if (!start.ok) return fail(0, "no initial operating point: " + start.message, start.worst_unknown);
-    if (!integrator.initialize(0, start.x, start.p))
-      return fail(0, integrator.failure().reason, integrator.failure().unknown);
-    emit(0, integrator.state());
+    return success;
+  }
 
-    while (integrator.time() < t_end) {
-      const double t_before = integrator.time();
-      const padae::StepOutcome outcome = integrator.step(t_end);
-      switch (outcome.kind) {
-        case padae::StepKind::failed:
-          return fail(integrator.failure().t, integrator.failure().reason, integrator.failure().unknown);
-        case padae::StepKind::event: {
-          // Two rows at a discontinuity: the state just before and just after it.
-          const padae::EventRecord& event = integrator.last_event();
-          if (waveforms.differ(event.x_before, integrator.state())) emit(outcome.t, event.x_before);
-          emit(outcome.t, integrator.state());
-          if (event_log) event_log->write(*model, event, event.jumped ? model->jump_dissipation(event) : 0.0);
-          break;
-        }
-        case padae::StepKind::accepted:
-          if (options.grid) emit_grid(t_before, outcome.t);
-          emit(outcome.t, integrator.state());
-          break;
-        case padae::StepKind::time_event:
-        case padae::StepKind::stop: emit(outcome.t, integrator.state()); break;
+  // CSV (stdout by default), raw file, event log; the plot reads a CSV file, so with the CSV on
+  // stdout a temporary one is written too. Cannot open: exit 2.
+  int open_outputs() {
+    try {
+      const std::string output = options_.output.empty() ? "-" : options_.output;
+      plot_csv_ = output;
+      if (!options_.plot.empty() && output == "-") {
+        temporary_csv_ = std::filesystem::temp_directory_path() / fmt::format("padsim-{}.csv", getpid());
+        plot_csv_ = temporary_csv_.string();
+        waveforms_.add(output::make_csv_writer(plot_csv_));
       }
-      progress.update(outcome.t);
+      waveforms_.add(output::make_csv_writer(output));
+      if (!options_.raw.empty()) waveforms_.add(output::make_raw_writer(options_.raw, !options_.raw_ascii, title_));
+      if (!options_.events.empty()) event_log_ = std::make_unique<EventLog>(options_.events);
+      waveforms_.begin(probes_);
+    } catch (const std::exception& e) {
+      print_error(e.what());
+      return bad_input;
     }
-  } catch (const std::exception& e) {
-    progress.clear();
-    waveforms.finish();
-    print_error(fmt::format("stopped at t = {:.9g} s: {}", integrator.time(), e.what()));
+    return success;
+  }
+
+  // Start, then step by step to TSTOP: every outcome becomes rows. A failure keeps the rows
+  // written so far (exit 1); so does a writer failing mid-run (disk full).
+  int simulate() {
+    integrator_ = std::make_unique<padae::Integrator>(*model_, integrator_options_);
+    progress_ = std::make_unique<Progress>(!options_.quiet, settings_.tstop);
+    try {
+      const mna::Start start = mna::find_start(*model_, 0, uic_, integrator_options_);
+      try {
+        mna::check_mode_structure(*model_, start_kind(), start.p);
+      } catch (const mna::ModelError& e) {
+        print_error(e.what());
+        return bad_input;
+      }
+      if (!start.ok) return fail(0, "no initial operating point: " + start.message, start.worst_unknown);
+      if (!integrator_->initialize(0, start.x, start.p))
+        return fail(0, integrator_->failure().reason, integrator_->failure().unknown);
+      emit(0, integrator_->state());
+
+      while (integrator_->time() < settings_.tstop) {
+        const double t_before = integrator_->time();
+        const padae::StepOutcome outcome = integrator_->step(settings_.tstop);
+        switch (outcome.kind) {
+          case padae::StepKind::failed:
+            return fail(integrator_->failure().t, integrator_->failure().reason, integrator_->failure().unknown);
+          case padae::StepKind::event: {
+            // Two rows at a discontinuity: the state just before and just after it.
+            const padae::EventRecord& event = integrator_->last_event();
+            if (waveforms_.differ(event.x_before, integrator_->state())) emit(outcome.t, event.x_before);
+            emit(outcome.t, integrator_->state());
+            if (event_log_) event_log_->write(*model_, event, event.jumped ? model_->jump_dissipation(event) : 0.0);
+            break;
+          }
+          case padae::StepKind::accepted:
+            if (options_.grid) emit_grid(t_before, outcome.t);
+            emit(outcome.t, integrator_->state());
+            break;
+          case padae::StepKind::time_event:
+          case padae::StepKind::stop: emit(outcome.t, integrator_->state()); break;
+        }
+        progress_->update(outcome.t);
+      }
+    } catch (const std::exception& e) {
+      return fail(integrator_->time(), e.what(), -1);
+    }
+    return success;
+  }
+
+  // Flush the waveform, plot, statistics, temporary file. A failed plot makes exit 1 (the
+  // waveform is complete, but not every requested output).
+  int finish(int status) {
+    if (progress_) progress_->clear();
+    waveforms_.finish();
+    if (status == success && !options_.plot.empty()) {
+      std::string error;
+      if (!output::plot_png(plot_csv_, options_.plot, error)) {
+        print_error("plot: " + error);
+        status = simulation_failure;
+      }
+    }
+    if (!temporary_csv_.empty()) std::filesystem::remove(temporary_csv_);
+    if (options_.stats && integrator_) print_statistics(integrator_->statistics(), model_->size(), wall_seconds());
+    return status;
+  }
+
+ private:
+  mna::StartKind start_kind() const {
+    return uic_ ? mna::StartKind::initial_conditions : mna::StartKind::operating_point;
+  }
+  double wall_seconds() const { return std::chrono::duration<double>(Clock::now() - wall_start_).count(); }
+
+  int fail(double t, const std::string& why, int unknown) {
+    if (progress_) progress_->clear();
+    print_error(fmt::format("simulation failed at t = {:.9g} s: {}{}", t, why, blame(*model_, unknown)));
     return simulation_failure;
   }
-  progress.clear();
-  waveforms.finish();
-
-  int status = success;
-  if (!options.plot.empty()) {
-    std::string error;
-    if (!output::plot_png(plot_csv, options.plot, error)) {
-      print_error("plot: " + error);
-      status = simulation_failure;  // the waveform is complete, but not every requested output
-    }
+  void emit(double t, const mna::Vector& x) {
+    if (t >= tstart_) waveforms_.row(t, x);
   }
-  if (!temporary_csv.empty()) std::filesystem::remove(temporary_csv);
-  if (options.stats) print_statistics(integrator.statistics(), model->size(),
-                                      std::chrono::duration<double>(Clock::now() - wall_start).count());
-  return status;
+  // --grid: rows at TSTART + k TSTEP strictly inside the last accepted step, from its
+  // polynomial (after a restart at a corner or an event the polynomial is gone: none there).
+  void emit_grid(double t_before, double t_after) {
+    auto point = [&](long k) { return tstart_ + static_cast<double>(k) * settings_.tstep; };
+    while (point(next_grid_) <= t_before) ++next_grid_;
+    for (; point(next_grid_) < t_after; ++next_grid_) emit(point(next_grid_), integrator_->interpolate(point(next_grid_)));
+  }
+
+  const CommandOptions& options_;
+  const Clock::time_point wall_start_ = Clock::now();
+  std::string title_;
+  mna::RunSettings settings_;
+  double tstart_ = 0;
+  bool uic_ = false;
+  padae::Options integrator_options_;
+  mna::CircuitSpec circuit_;
+  std::unique_ptr<mna::Model> model_;
+  std::vector<Probe> probes_;
+  Waveforms waveforms_;
+  std::unique_ptr<EventLog> event_log_;
+  std::string plot_csv_;
+  std::filesystem::path temporary_csv_;
+  std::unique_ptr<padae::Integrator> integrator_;
+  std::unique_ptr<Progress> progress_;
+  long next_grid_ = 0;
+};
+
+}  // namespace
+
+int run_command(const CommandOptions& options) {
+  Session session(options);
+  if (const int status = session.load(); status != success) return status;
+  if (const int status = session.open_outputs(); status != success) return status;
+  return session.finish(session.simulate());
 }
 
 }  // namespace padsim

@@ -12,9 +12,10 @@
 compare: both waveforms interpolated onto the reference's time points; per probe the max and
 RMS of |padsim - ngspice| divided by the reference's range; switching instants (threshold
 crossings of one signal) matched one to one and their time differences compared separately.
-The max error has a time tolerance tau equal to ngspice's own switching-time error at default
-settings (floor): each reference point is compared with the values padsim takes within +-tau
-of its time, so an edge displaced by no more than ngspice's own timing error costs nothing
+The max error has a time tolerance: ngspice's own switching-time error at default settings
+(floor) plus the widest sampling step across a matched edge. Each reference point is compared
+with the values padsim takes within that time of it (and each padsim point with the
+reference's), so an edge displaced by no more than ngspice's own timing error costs nothing
 there (the displacement is checked as a switching instant); the RMS has no time tolerance.
 A case fails when an error exceeds its tolerance, when a crossing is missing or extra, or when
 either simulator fails (ngspice can exit 0 after "Timestep too small": the last time point must
@@ -208,9 +209,22 @@ def check_against(result, tol):
     return failures
 
 
+def summary_row(name, result, tol, test, default, ref, failures):
+    """One markdown row: worst probe errors against their tolerances, switching instants, times."""
+    worst = max(result["probes"].items(), key=lambda kv: kv[1][0] / max(tol["probes"][kv[0]][0], 1e-300))
+    worst_rms = max(result["probes"].items(), key=lambda kv: kv[1][1] / max(tol["probes"][kv[0]][1], 1e-300))
+    c = result["crossing"]
+    sw = "-" if not c else "%d/%d, %.2g s (tol %.2g s)" % (c["test_count"], c["ref_count"], c["max_dt"], tol["crossing_dt"])
+    return "| %s | %s | %s %.2g (tol %.2g) | %s %.2g (tol %.2g) | %s | %.3f | %.3f | %.3f |" % (
+        name, "FAIL" if failures else "ok", worst[0], worst[1][0], tol["probes"][worst[0]][0],
+        worst_rms[0], worst_rms[1][1], tol["probes"][worst_rms[0]][1], sw,
+        test.seconds, default.seconds, ref.seconds)
+
+
 def cmd_compare(args, cases):
     status = 0
     floor = load_floor(args.floor)
+    rows = []
     for name in args.cases:
         case = cases[name]
         if name not in floor:
@@ -230,6 +244,7 @@ def cmd_compare(args, cases):
             continue
         result = measure(ref, test, case, tol["tau"])
         failures = check_against(result, tol)
+        rows.append(summary_row(name, result, tol, test, default, ref, failures))
         print("%-24s %s: %s" % (name, "FAILED" if failures else "ok", format_result(result)))
         print("%-24s time: padsim %.3f s, ngspice default %.3f s, ngspice tight %.3f s (%d/%d/%d points)"
               % ("", test.seconds, default.seconds, ref.seconds, len(test.time), len(default.time), len(ref.time)))
@@ -237,6 +252,10 @@ def cmd_compare(args, cases):
             print("%-24s   %s" % ("", f))
         if failures:
             status = 1
+    if args.summary:
+        with open(args.summary, "a") as f:
+            for row in rows:
+                f.write(row + "\n")
     return status
 
 
@@ -319,6 +338,7 @@ def main(argv=None):
     ap.add_argument("--padsim")
     ap.add_argument("--workdir", default=os.path.join(os.getcwd(), "ngspice-regression"))
     ap.add_argument("--write", help="floor: write (update) the measurements in this JSON file")
+    ap.add_argument("--summary", help="compare: append one markdown table row per case to this file")
     ap.add_argument("--floor", default=os.path.join(HERE, "floor.json"), help="compare, table: the floor measurements")
     args = ap.parse_args(argv)
     cases = load_cases()

@@ -443,17 +443,20 @@ def compare(ref, test, probes, crossing=None, tau=None):
     crossing: optional list of (probe, threshold, hysteresis): the switching instants. Their
     crossings in both waveforms are matched one to one (direction, nearness) and the largest time
     difference reported; missing and extra crossings are counted.
-    tau: the time tolerance of the max error (see tube_distance): an edge displaced by up to tau
-    costs nothing in the max error (the displacement itself is the switching-instant check).
-    None: tau = the measured largest switching-time difference (0 without crossings); the floor
-    run measures ngspice's own this way, and the regression then uses that value for padsim.
-    The RMS is pointwise, with no time tolerance.
+    tau: the timing tolerance of the max error: an edge displaced by up to tau costs nothing in
+    the max error (the displacement itself is the switching-instant check). None: tau = the
+    measured largest switching-time difference (0 without crossings); the floor run measures
+    ngspice's own this way, and the regression then uses that value for padsim. To tau is added
+    the widest sampling step across a matched edge (in either waveform): the max error's time
+    tolerance (see tube_distance) is tau plus that step. The RMS is pointwise, with no time
+    tolerance.
     Returns {"probes": {probe: (max, rms)}, "tau": tau, "crossing": None or {"max_dt",
     "ref_count", "test_count", "unmatched", "surplus"}}."""
     result = {"probes": {}, "crossing": None}
     if crossing is not None:
         specs = crossing if isinstance(crossing, list) else [crossing]
-        total = {"max_dt": 0.0, "ref_count": 0, "test_count": 0, "unmatched": 0, "surplus": 0}
+        total = {"max_dt": 0.0, "ref_count": 0, "test_count": 0, "unmatched": 0, "surplus": 0,
+                 "edge_step": 0.0}
         for name, threshold, hysteresis in specs:
             name = name.lower()
             cr = crossing_brackets(ref.time, ref.signals[name], threshold, hysteresis)
@@ -464,9 +467,13 @@ def compare(ref, test, probes, crossing=None, tau=None):
             total["test_count"] += len(ct)
             total["unmatched"] += unmatched
             total["surplus"] += surplus
+            for i, j in pairs:
+                total["edge_step"] = max(total["edge_step"], cr[i][3] - cr[i][2], ct[j][3] - ct[j][2])
         result["crossing"] = total
     if tau is None:
         tau = result["crossing"]["max_dt"] if result["crossing"] else 0.0
+    if result["crossing"]:
+        tau += result["crossing"]["edge_step"]
     result["tau"] = tau
     for p in probes:
         p = p.lower()

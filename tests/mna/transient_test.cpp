@@ -369,3 +369,58 @@ TEST(Start, ShockleyDiodeOperatingPointSatisfiesItsEquation) {
 
 }  // namespace
 }  // namespace mna::test
+
+namespace mna::test {
+namespace {
+
+TEST(Transient, CoupledInductorInducesMdiDt) {
+  // Primary: 1 V through R = 2 ohm into L1 = 4 mH, i1 = (1 - e^(-t R / L1)) / R; secondary L2 =
+  // 1 mH into 1 G (open): v2 = M di1/dt = M / L1 e^(-t R / L1), M = k sqrt(L1 L2), once the
+  // secondary's own transient, L2 (1 - k^2) / 1 G = 0.36 ps, is over (checked from 1 ns on).
+  const double l1 = 4e-3, l2 = 1e-3, k = 0.8, r = 2, mutual = k * std::sqrt(l1 * l2);
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}, 1.0);
+  c.add("r1", {"in", "a"}, r);
+  c.add("l1", {"a", "0"}, l1).initial_condition = 0.0;
+  c.add("l2", {"s", "0"}, l2).initial_condition = 0.0;
+  c.add("k1", {}, k).controls = {"l1", "l2"};
+  c.add("r2", {"s", "0"}, 1e9);
+  Model m(c, {.tstep = 1e-5, .tstop = 4e-3});
+  const Simulation run = simulate(m, 4e-3, true);
+  ASSERT_TRUE(run.ok) << run.failure;
+  const int s = unknown(m, "v(s)"), i1 = unknown(m, "i(l1)");
+  std::size_t checked = 0;
+  for (std::size_t n = 0; n < run.times.size(); ++n) {
+    const double t = run.times[n], decay = std::exp(-t * r / l1);
+    if (t < 1e-9) continue;
+    ++checked;
+    EXPECT_NEAR(run.states[n][i1], (1 - decay) / r, 1e-5) << "t = " << t;
+    EXPECT_NEAR(run.states[n][s], mutual / l1 * decay, 1e-5) << "t = " << t;
+  }
+  EXPECT_GT(checked, 10u);
+}
+
+TEST(Events, CurrentSwitchFollowsItsControllingCurrent) {
+  // A current ramp 0 -> 1 mA -> 0 through Vsense controls W1 (IT = 0.5 mA, IH = 0.1 mA): on
+  // at 0.6 mA (t = 0.6 ms), off at 0.4 mA (t = 1.6 ms).
+  CircuitSpec c;
+  c.add("i1", {"0", "x"}).waveform = {Waveform::Shape::piecewise_linear, {0, 0, 1e-3, 1e-3, 2e-3, 0}};
+  c.add("vsense", {"x", "0"}, 0.0);
+  c.add("v1", {"in", "0"}, 1.0);
+  c.add("r1", {"in", "out"}, 1.0);
+  auto& w = c.add("w1", {"out", "0"});
+  w.controls = {"vsense"};
+  w.model = {{"it", 0.5e-3}, {"ih", 0.1e-3}, {"ron", 1.0}, {"roff", 1e6}};
+  Model m(c, {.tstep = 1e-5, .tstop = 2e-3});
+  const Simulation run = simulate(m, 2e-3, false);
+  ASSERT_TRUE(run.ok) << run.failure;
+  ASSERT_EQ(run.events.size(), 2u);
+  // Located where the interpolated current crosses the threshold: to 1e-10 s here is 1e-13 A
+  // of current (1 A/s ramp), below its absolute tolerance.
+  EXPECT_NEAR(run.events[0].t, 0.6e-3, 1e-10);
+  EXPECT_NEAR(run.events[1].t, 1.6e-3, 1e-10);
+  EXPECT_NEAR(run.events[0].x_after[unknown(m, "v(out)")], 0.5, 1e-12);
+}
+
+}  // namespace
+}  // namespace mna::test

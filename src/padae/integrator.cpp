@@ -278,7 +278,9 @@ Integrator::Impl::Correction Integrator::Impl::correct(double t_new, Newton mode
     newton.solve(delta);
     if (cj_ratio != 1.0) delta *= 2.0 / (1.0 + cj_ratio);  // compensates the stale cj
     x_new -= delta;
-    double norm = weighted_norm(delta, inverse_weight_x, options.norm);
+    // Converged means every unknown within its tolerance, as circuit simulators require: an
+    // algebraic current that steers a switch must not hide in an average.
+    double norm = weighted_max_norm(delta, inverse_weight_x);
     if (!std::isfinite(norm)) return Correction::diverged;
     bool converged = false;
     if (mode == Newton::full) {
@@ -585,9 +587,10 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     }
     if (predicate_count == 0) break;
     // Convention (9) for the new mode: a predicate that flipped here is judged where the new
-    // motion is heading (just after t); the others on the state right after the jump.
+    // motion is heading (just after t); the others on the jump itself, impulses included (the
+    // voltage spike of a broken inductor current turns a freewheeling diode on).
     Vector guards_after(predicate_count), guards_heading(predicate_count);
-    if (!evaluate_guards(t_at, consistent->x, guards_after) ||
+    if (!evaluate_guards(t_at, consistent->x_impulse, guards_after) ||
         !evaluate_guards(consistent->t_heading, consistent->x_heading, guards_heading)) {
       failure = Failure{t_at, "a guard function cannot be evaluated after the event at t = " + format_time(t_at), -1};
       return false;
@@ -595,7 +598,6 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     Predicates next = p;
     for (int k = 0; k < predicate_count; ++k)
       next[k] = (flipped_here[k] ? guards_heading[k] : guards_after[k]) > 0;
-    guards_now = guards_after;
     if (next == p) break;
     target = next;
   }

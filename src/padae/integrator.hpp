@@ -22,8 +22,9 @@
 
 namespace padae {
 
-// How the weighted errors of several unknowns combine: root-mean-square (IDA's, the default)
-// or the largest (every quantity held to its tolerance individually; stricter on large circuits).
+// How the error test combines the weighted local errors of the dynamic quantities: root-mean-
+// square (IDA's, the default) or the largest (each held to its tolerance; stricter on large
+// circuits). Newton's convergence test always takes the largest.
 enum class ErrorNorm { rms, max };
 
 struct Options {

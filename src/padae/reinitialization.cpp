@@ -157,6 +157,7 @@ std::optional<ConsistentState> Reinitializer::derivatives(double t, const Vector
   Vector x_settled = x_plus;
   if (!backward_euler_with_continuation(t + h_settle, h_settle, q_plus, p, p, x_settled))
     return std::nullopt;
+  state.x_impulse = x_plus;
   state.x = x_plus;
   for (int i = 0; i < system_.size(); ++i)
     if (system_.kind(i) == UnknownKind::algebraic) state.x[i] = x_settled[i];

@@ -26,6 +26,7 @@
 namespace padae {
 
 struct ConsistentState {
+  Vector x_impulse;     // the state the vanishing step reaches, impulsive unknowns included
   Vector x;             // consistent state at t + 0
   Vector q;             // q(x)
   Vector q_derivative;  // right derivative of q at t

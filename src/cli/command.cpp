@@ -150,6 +150,7 @@ class Session {
     uic_ = flat->tran && flat->tran->use_initial_conditions;
     mna::Tolerances tolerances;
     apply_tolerances(*flat, options_, integrator_options_, tolerances);
+    settings_.reltol = integrator_options_.rtol;
     integrator_options_.time_scale = settings_.tstop;
     if (flat->tran && flat->tran->max_step) integrator_options_.max_step = *flat->tran->max_step;
     try {

@@ -51,10 +51,12 @@ struct CircuitSpec {
   }
 };
 
-// What the run adds to the circuit: source defaults use TSTEP and TSTOP (as ngspice does).
+// What the run adds to the circuit: source defaults use TSTEP and TSTOP, the diode's breakdown
+// knee is matched to RELTOL (as ngspice does).
 struct RunSettings {
   double tstep = 0;
   double tstop = 0;
+  double reltol = 1e-3;
 };
 
 }  // namespace mna

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -246,6 +247,58 @@ TEST_F(Cli, RawFileReadsBackInNgspice) {
       ++k;
     }
     EXPECT_EQ(k, csv.rows.size()) << mode;
+  }
+}
+
+// The Shockley diode against ngspice (tight tolerances, gear): forward conduction with junction
+// and transit-time charge, then a slow sweep through reverse breakdown.
+TEST_F(Cli, ShockleyDiodeMatchesNgspice) {
+  if (std::system("command -v ngspice > /dev/null 2>&1") != 0) GTEST_SKIP() << "ngspice not installed";
+  struct Case {
+    std::string circuit, probes;
+    double tolerance;
+  };
+  const Case cases[] = {
+      {"V1 in 0 SIN(0 12 200k)\nR1 in a 50\nD1 a out dz\nC1 out 0 10n\nR2 out 0 1k\n"
+       ".model dz D(is=1e-12 n=1.2 rs=0.5 cjo=50p vj=0.7 m=0.4 tt=20n)\n.tran 10n 20u\n",
+       "v(a) v(out) i(v1)", 5e-3},
+      {"V1 in 0 PWL(0 -15 1m 1.5)\nR1 in a 10\nD1 a 0 dz\n.model dz D(is=1e-12 n=1.2 rs=0.5 bv=10 ibv=1m)\n.tran 1u 1m\n",
+       "v(a) i(v1)", 1e-5},
+  };
+  for (const Case& c : cases) {
+    const std::string reference = path("ngspice.txt"), csv_path = path("padsim.csv");
+    const std::string deck = write("ng.cir", "* diode\n" + c.circuit +
+                                                 ".options reltol=1e-7 abstol=1e-14 vntol=1e-10 method=gear\n"
+                                                 ".control\nset wr_singlescale\nset wr_vecnames\noption numdgt=12\nrun\n"
+                                                 "wrdata " + reference + " " + c.probes + "\nquit\n.endc\n.end\n");
+    ASSERT_EQ(std::system(("ngspice -b " + deck + " > /dev/null 2>&1").c_str()), 0);
+    std::string probes = c.probes;
+    std::replace(probes.begin(), probes.end(), ' ', ',');
+    const Result r = run(write("pd.cir", "* diode\n" + c.circuit + ".end\n") + " --rtol 1e-7 --probe '" + probes +
+                         "' -o " + csv_path);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const Csv csv = parse_csv(read(csv_path));
+    // padsim's rows (its accepted steps) against ngspice's dense points interpolated linearly.
+    std::istringstream text(read(reference));
+    std::string header;
+    std::getline(text, header);
+    std::vector<std::vector<double>> reference_rows;
+    for (std::vector<double> row(csv.header.size()); text >> row[0];) {
+      for (std::size_t j = 1; j < row.size(); ++j) text >> row[j];
+      reference_rows.push_back(row);
+    }
+    ASSERT_GT(reference_rows.size(), 100u);
+    std::size_t k = 1, compared = 0;
+    for (const auto& row : csv.rows) {
+      while (k + 1 < reference_rows.size() && reference_rows[k][0] < row[0]) ++k;
+      const auto& a = reference_rows[k - 1];
+      const auto& b = reference_rows[k];
+      const double w = b[0] > a[0] ? std::clamp((row[0] - a[0]) / (b[0] - a[0]), 0.0, 1.0) : 1;
+      for (std::size_t j = 1; j < row.size(); ++j)
+        EXPECT_NEAR(row[j], a[j] + w * (b[j] - a[j]), c.tolerance) << csv.header[j] << " at t = " << row[0];
+      ++compared;
+    }
+    EXPECT_GT(compared, 10u);
   }
 }
 

@@ -1,5 +1,5 @@
 // D: the junction diode with ngspice's equations (level 1: IS, N, RS, CJO, VJ, M, FC, TT, BV,
-// IBV, area), for regression against ngspice. The junction current, its charge and GMIN in
+// IBV, NBV, area), for regression against ngspice. The junction current, its charge and GMIN in
 // parallel are loaded at the junction voltage; RS adds an internal node.
 // Newton may try huge forward voltages: above EXPONENT_LIMIT thermal voltages the exponential
 // continues linearly (value and slope match), so f stays smooth and finite; ngspice limits the
@@ -21,22 +21,23 @@ constexpr double exponent_limit = 40;
 
 class Diode final : public Device {
  public:
-  explicit Diode(const ElementSpec& spec) : Device(spec.name), nodes_(spec.nodes) {
+  Diode(const ElementSpec& spec, const RunSettings& run) : Device(spec.name), nodes_(spec.nodes) {
     require_nodes(spec, 2);
-    const double area = spec.area;
+    const double area = spec.area, vt = boltzmann * nominal_temperature / charge;
     saturation_current_ = parameter(spec, "is", 1e-14) * area;
-    thermal_voltage_ = parameter(spec, "n", 1) * boltzmann * nominal_temperature / charge;
+    thermal_voltage_ = parameter(spec, "n", 1) * vt;
+    breakdown_thermal_voltage_ = parameter(spec, "nbv", parameter(spec, "n", 1)) * vt;
     series_resistance_ = parameter(spec, "rs", 0) / area;
     junction_capacitance_ = parameter(spec, "cjo", parameter(spec, "cj0", 0)) * area;
     junction_potential_ = parameter(spec, "vj", 1);
     grading_ = parameter(spec, "m", 0.5);
     depletion_fraction_ = parameter(spec, "fc", 0.5);
     transit_time_ = parameter(spec, "tt", 0);
-    if (!(saturation_current_ > 0) || !(thermal_voltage_ > 0) || !(series_resistance_ >= 0) ||
+    if (!(saturation_current_ > 0) || !(thermal_voltage_ > 0) || !(breakdown_thermal_voltage_ > 0) || !(series_resistance_ >= 0) ||
         !(junction_potential_ > 0) || !(grading_ < 1) || !(depletion_fraction_ < 1))
       throw ModelError("diode '" + spec.name + "': parameters out of range (IS, N > 0, RS >= 0, VJ > 0, M < 1, FC < 1)");
     if (auto bv = spec.model.find("bv"); bv != spec.model.end() && std::isfinite(bv->second))
-      breakdown_voltage_ = breakdown_knee(bv->second, parameter(spec, "ibv", 1e-3) * area);
+      breakdown_voltage_ = breakdown_knee(bv->second, parameter(spec, "ibv", 1e-3) * area, vt, run.reltol);
   }
 
   void allocate(Unknowns& u) override {
@@ -107,10 +108,10 @@ class Diode final : public Device {
       a = a * a * a;
       return {-is * (1 + a), is * 3 * a / v};
     }
-    const double x = -(*breakdown_voltage_ + v) / vt;
+    const double vtb = breakdown_thermal_voltage_, x = -(*breakdown_voltage_ + v) / vtb;
     const double ex = x > exponent_limit ? std::exp(exponent_limit) * (1 + x - exponent_limit) : std::exp(x);
     const double dex = x > exponent_limit ? std::exp(exponent_limit) : std::exp(x);
-    return {-is * ex, is * dex / vt};
+    return {-is * ex, is * dex / vtb};
   }
 
   // Depletion charge and capacitance (SPICE: power law below FC VJ, linear extrapolation of the
@@ -129,29 +130,30 @@ class Diode final : public Device {
   }
 
  private:
-  // ngspice's knee (diotemp.c): the voltage where the breakdown current equals IBV.
-  double breakdown_knee(double bv, double ibv) const {
-    const double is = saturation_current_, vt = thermal_voltage_;
+  // ngspice's knee (diotemp.c): the voltage where the breakdown current equals IBV, iterated
+  // to RELTOL as there (vt: the thermal voltage without N, as there).
+  double breakdown_knee(double bv, double ibv, double vt, double reltol) const {
+    const double is = saturation_current_, vtb = breakdown_thermal_voltage_;
     if (ibv < is * bv / vt) return bv;
-    double knee = bv - vt * std::log(1 + ibv / is);
+    double knee = bv - vtb * std::log(1 + ibv / is);
     for (int k = 0; k < 25; ++k) {
-      knee = bv - vt * std::log(ibv / is + 1 - knee / vt);
-      const double current = is * (std::exp((bv - knee) / vt) - 1 + knee / vt);
-      if (std::abs(current - ibv) <= 1e-3 * ibv) break;
+      knee = bv - vtb * std::log(ibv / is + 1 - knee / vt);
+      const double current = is * (std::exp((bv - knee) / vtb) - 1 + knee / vt);
+      if (std::abs(current - ibv) <= reltol * ibv) break;
     }
     return knee;
   }
 
   std::vector<std::string> nodes_;
-  double saturation_current_, thermal_voltage_, series_resistance_, junction_capacitance_;
+  double saturation_current_, thermal_voltage_, breakdown_thermal_voltage_, series_resistance_, junction_capacitance_;
   double junction_potential_, grading_, depletion_fraction_, transit_time_;
   std::optional<double> breakdown_voltage_;
   int anode_ = ground, cathode_ = ground, junction_ = ground;
   Stamper::Block junction_slots_, series_slots_;
 };
 
-const Registration registration("d", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Diode>(spec);
+const Registration registration("d", [](const ElementSpec& spec, const RunSettings& run) {
+  return std::make_unique<Diode>(spec, run);
 });
 
 }  // namespace

@@ -43,7 +43,8 @@ int main(int argc, char** argv) {
   app.add_flag("-q,--quiet", options.quiet, "no warnings, no progress line");
   app.add_flag("--grid", options.grid,
                "also write rows on the .tran TSTEP grid, from the integrator's interpolating polynomial "
-               "(steps that end at a source corner or an event keep only their end rows)");
+               "(error-controlled for capacitor and inductor quantities only; steps that end at a source "
+               "corner or an event keep only their end rows)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -152,7 +152,11 @@ class Session {
     apply_tolerances(*flat, options_, integrator_options_, tolerances);
     settings_.reltol = integrator_options_.rtol;
     integrator_options_.time_scale = settings_.tstop;
-    if (flat->tran && flat->tran->max_step) integrator_options_.max_step = *flat->tran->max_step;
+    // TMAX, or (TSTOP - TSTART) / 50 as ngspice's fallback: the error test controls charges and
+    // fluxes only, so without a bound a quiet stretch could step over a whole source period that
+    // guards and algebraic node voltages follow (not TSTEP: that would give up the large steps).
+    integrator_options_.max_step = flat->tran && flat->tran->max_step ? *flat->tran->max_step
+                                                                      : (settings_.tstop - tstart_) / 50;
     try {
       circuit_ = mna::circuit_from_netlist(*flat);
       model_ = std::make_unique<mna::Model>(circuit_, settings_);

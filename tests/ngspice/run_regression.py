@@ -237,7 +237,7 @@ def cmd_compare(args, cases):
             ref = run_reference(case, wd, "tight", args.ngspice)
             default = run_reference(case, wd, "default", args.ngspice)
             test = sc.run_padsim(args.padsim, netlist_of(case), case["probes"], wd,
-                                 extra=case.get("padsim_args", []))
+                                 extra=args.padsim_args.split() + case.get("padsim_args", []))
         except sc.SimulationFailure as e:
             print("%-24s FAILED: %s" % (name, e))
             status = 1
@@ -338,6 +338,10 @@ def main(argv=None):
     ap.add_argument("--padsim")
     ap.add_argument("--workdir", default=os.path.join(os.getcwd(), "ngspice-regression"))
     ap.add_argument("--write", help="floor: write (update) the measurements in this JSON file")
+    ap.add_argument("--padsim-args", default="--grid",
+                    help="compare: arguments for every padsim run (default --grid: rows also on the "
+                         ".tran TSTEP grid from padsim's interpolating polynomial, the output "
+                         "resolution ngspice's default maximum step gives)")
     ap.add_argument("--summary", help="compare: append one markdown table row per case to this file")
     ap.add_argument("--floor", default=os.path.join(HERE, "floor.json"), help="compare, table: the floor measurements")
     args = ap.parse_args(argv)

@@ -62,14 +62,17 @@ std::vector<double> with_defaults(Waveform::Shape shape, std::vector<double> p, 
 }  // namespace
 
 // The corners of the pulse period that contains t (the first period before TD, the last one
-// after NP pulses). value() and next_corner() both use these very numbers, so that the
-// integrator, which lands exactly on a corner, and the function agree on which side it is.
-SourceFunction::PulseCorners SourceFunction::pulse_corners(double t) const {
+// after NP pulses); a period start itself belongs to the period before when `left` (the value
+// there is the left limit, which matters when PW or PER cut the pulse short and it jumps).
+// value() and next_corner() both use these very numbers, so that the integrator, which lands
+// exactly on a corner, and the function agree on which side it is.
+SourceFunction::PulseCorners SourceFunction::pulse_corners(double t, bool left) const {
   const double td = p_[2], tr = p_[3], tf = p_[4], pw = p_[5], per = p_[6], count = p_[7];
   auto start_of = [&](double k) { return td + k * per; };
   double k = t <= td ? 0 : std::floor((t - td) / per);
   if (k > 0 && start_of(k) > t) --k;  // floor's rounding against the start as computed here
   if (start_of(k + 1) <= t) ++k;
+  if (left && k > 0 && start_of(k) == t) --k;
   if (count > 0 && k > count - 1) k = count - 1;
   const double start = start_of(k), next = count > 0 && k + 1 >= count ? infinity : start_of(k + 1);
   // A period's corners never pass the next period's start, and one within round-off of it is it
@@ -88,7 +91,7 @@ double SourceFunction::value(double t) const {
     case Waveform::Shape::constant: return dc_;
     case Waveform::Shape::pulse: {
       const double v1 = p_[0], v2 = p_[1];
-      const PulseCorners c = pulse_corners(t);
+      const PulseCorners c = pulse_corners(t, true);
       if (t <= c.rise_start) return v1;
       if (t < c.rise_end) return v1 + (v2 - v1) * (t - c.rise_start) / (c.rise_end - c.rise_start);
       if (t <= c.fall_start) return v2;
@@ -128,7 +131,8 @@ double SourceFunction::next_corner(double t) const {
   switch (shape_) {
     case Waveform::Shape::constant: return infinity;
     case Waveform::Shape::pulse: {
-      for (const PulseCorners& c : {pulse_corners(t), pulse_corners(pulse_corners(t).next_period)})
+      const PulseCorners here = pulse_corners(t, false);
+      for (const PulseCorners& c : {here, pulse_corners(here.next_period, false)})
         for (double corner : {c.rise_start, c.rise_end, c.fall_start, c.fall_end})
           if (corner > t) return corner;
       return infinity;

@@ -24,7 +24,7 @@ class SourceFunction {
   struct PulseCorners {
     double rise_start, rise_end, fall_start, fall_end, next_period;
   };
-  PulseCorners pulse_corners(double t) const;
+  PulseCorners pulse_corners(double t, bool left) const;
 
   Waveform::Shape shape_;
   std::vector<double> p_;  // parameters with defaults filled in

@@ -50,8 +50,10 @@ TEST(Waveform, ZeroPulseWidthMeansTstopAsInNgspice) {
   // level stays high until the period restarts.
   SourceFunction f({Shape::pulse, {-1, 1, 0, 50e-6, 50e-6, 0, 100e-6}}, 0, run, "vtri");
   EXPECT_DOUBLE_EQ(f.value(75e-6), 1);
-  EXPECT_DOUBLE_EQ(f.value(100e-6), -1);
+  EXPECT_DOUBLE_EQ(f.value(100e-6), 1);  // the left limit at the jump
+  EXPECT_DOUBLE_EQ(f.value(100.001e-6), -1 + 2 * 0.001 / 50);
   EXPECT_DOUBLE_EQ(f.next_corner(50e-6), 100e-6);
+  EXPECT_DOUBLE_EQ(f.next_corner(100e-6), 150e-6);
 }
 
 TEST(Waveform, PulseDefaultsFollowNgspice) {

@@ -1,6 +1,7 @@
 // Internal: an unbuffered file descriptor fed whole records from a user-space buffer.
 // Records (CSV lines, raw points) are appended with commit(); the buffer reaches the file only at
-// record boundaries, when it grows past a size limit or 0.1 s after the previous flush.
+// record boundaries: when it grows past 64 KiB, or when a record is committed 0.1 s or more
+// after the previous flush (so a row that arrives slowly is written at once).
 #pragma once
 
 #include <chrono>
@@ -39,7 +40,6 @@ class FileSink {
   std::int64_t written_ = 0;
   fmt::memory_buffer buffer_;
   std::chrono::steady_clock::time_point last_flush_;
-  unsigned records_since_check_ = 0;
 };
 
 }  // namespace padsim::output::detail

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -152,15 +153,17 @@ class Session {
     apply_tolerances(*flat, options_, integrator_options_, tolerances);
     settings_.reltol = integrator_options_.rtol;
     integrator_options_.time_scale = settings_.tstop;
-    // TMAX, or (TSTOP - TSTART) / 50 as ngspice's fallback: the error test controls charges and
-    // fluxes only, so without a bound a quiet stretch could step over a whole source period that
-    // guards and algebraic node voltages follow (not TSTEP: that would give up the large steps).
+    // TMAX, or (TSTOP - TSTART) / 50 as ngspice's fallback, and within a twentieth of any sine
+    // source's period: the error test controls charges and fluxes only, so a quiet stretch could
+    // otherwise step over source periods that guards and algebraic node voltages follow (not
+    // TSTEP: that would give up the large steps).
     integrator_options_.max_step = flat->tran && flat->tran->max_step ? *flat->tran->max_step
                                                                       : (settings_.tstop - tstart_) / 50;
     try {
       circuit_ = mna::circuit_from_netlist(*flat);
       model_ = std::make_unique<mna::Model>(circuit_, settings_);
       model_->set_tolerances(tolerances);
+      integrator_options_.max_step = std::min(integrator_options_.max_step, model_->resolution_step());
       mna::check_structure(*model_, start_kind());
       if (!options_.probes.empty()) probes_ = parse_probes(options_.probes, *model_);
       else if (!flat->saves.empty()) probes_ = requested_probes(flat->saves, *model_, circuit_);

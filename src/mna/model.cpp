@@ -194,6 +194,12 @@ double Model::next_time_event(double t) const {
   return next;
 }
 
+double Model::resolution_step() const {
+  double step = infinity;
+  for (const auto& d : devices_) step = std::min(step, d->resolution_step());
+  return step;
+}
+
 double Model::absolute_tolerance(int unknown, double) const {
   switch (unknowns_.category(unknown)) {
     case UnknownCategory::node_voltage:

@@ -37,6 +37,10 @@ class Model final : public padae::System {
   double next_time_event(double t) const override;
   double absolute_tolerance(int unknown, double default_atol) const override;
 
+  // The longest step that resolves every source's time dependence (a bound for
+  // padae::Options::max_step: voltages that merely follow a source are not error-tested).
+  double resolution_step() const;
+
   void set_tolerances(const Tolerances& tolerances) { tolerances_ = tolerances; }
   const Unknowns& unknowns() const { return unknowns_; }
   const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }

@@ -127,6 +127,10 @@ double SourceFunction::value(double t) const {
   return dc_;
 }
 
+double SourceFunction::resolution_step() const {
+  return shape_ == Waveform::Shape::sine && p_[2] > 0 ? 1 / (20 * p_[2]) : infinity;
+}
+
 double SourceFunction::next_corner(double t) const {
   switch (shape_) {
     case Waveform::Shape::constant: return infinity;

@@ -19,6 +19,10 @@ class SourceFunction {
   double value(double t) const;
   // First corner strictly after t, or +infinity.
   double next_corner(double t) const;
+  // The longest step that still resolves the function: a twentieth of a sine's period
+  // (+infinity for the others, whose corners are time events and which are linear or
+  // monotone in between).
+  double resolution_step() const;
 
  private:
   struct PulseCorners {

@@ -84,6 +84,7 @@ TEST(Waveform, SineWithDelayDampingAndPhase) {
   // FREQ defaults to 1/TSTOP.
   SourceFunction g({Shape::sine, {0, 1}}, 0, run, "v2");
   EXPECT_NEAR(g.value(0.25e-3), 1, 1e-12);
+  EXPECT_DOUBLE_EQ(f.resolution_step(), 1 / (20 * 1e3));  // a twentieth of the period
 }
 
 TEST(Waveform, ExponentialRiseAndFall) {

@@ -19,6 +19,7 @@ class CurrentSource final : public Device {
   }
   void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::current_defined, name()}); }
   double next_time_event(double t) const override { return function_.next_corner(t); }
+  double resolution_step() const override { return function_.resolution_step(); }
 
  private:
   std::vector<std::string> nodes_;

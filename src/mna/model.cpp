@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cctype>
+#include <unordered_set>
 
 namespace mna {
 
@@ -105,7 +106,9 @@ Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
   // Circuit nodes first, in order of appearance, so that v(...) unknowns come first.
   for (const auto& spec : circuit.elements)
     for (const auto& n : spec.nodes) unknowns_.node(n);
+  std::unordered_set<std::string> names;
   for (const auto& spec : circuit.elements) {
+    if (!names.insert(spec.name).second) throw ModelError("element '" + spec.name + "' is defined twice");
     const DeviceFactory* factory = DeviceRegistry::instance().find(registry_key(spec));
     if (!factory) throw ModelError("element '" + spec.name + "': unsupported element type");
     devices_.push_back((*factory)(spec, settings));

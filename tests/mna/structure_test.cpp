@@ -108,6 +108,10 @@ TEST(Structure, ModelErrorsNameTheElement) {
   c.add("f1", {"a", "0"}, 1).controls = {"vmissing"};
   c.add("r1", {"a", "0"}, 1);
   EXPECT_THROW(Model(c, {}), ModelError);
+  CircuitSpec twice;
+  twice.add("r1", {"a", "0"}, 1.0);
+  twice.add("r1", {"a", "0"}, 2.0);
+  EXPECT_THROW(Model(twice, {}), ModelError);
   CircuitSpec bad;
   bad.add("r1", {"a", "0"}, 0.0);
   try {

@@ -160,8 +160,13 @@ padae::EvalStatus Model::load(double t, const Vector& x, const padae::Predicates
   Evaluation e(t, x, p, out);
   for (const auto& d : devices_) d->load(e);
   if (holding_) hold_rows(x, out);
+  // Outside a device's domain (sqrt of a negative voltage, an overflowing exponential): say so,
+  // and padae cuts the step instead of factoring garbage.
   for (int i = 0; i < size(); ++i)
     if (!std::isfinite(out.f[i]) || !std::isfinite(out.q[i])) return padae::EvalStatus::outside_domain;
+  if (out.jacobian_requested)
+    for (std::size_t k = 0; k < out.df_dx.size(); ++k)
+      if (!std::isfinite(out.df_dx[k]) || !std::isfinite(out.dq_dx[k])) return padae::EvalStatus::outside_domain;
   return padae::EvalStatus::ok;
 }
 

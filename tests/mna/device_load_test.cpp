@@ -204,5 +204,26 @@ TEST(DeviceLoad, DiodeJunctionEnergyIsTheIntegralOfVdq) {
   EXPECT_NEAR(m.stored_energy(x), expected, 1e-9 * expected);
 }
 
+TEST(DeviceLoad, NonFiniteValuesOrDerivativesAreOutsideTheDomain) {
+  // B1: v(out) = sqrt(v(in)): its slope is infinite at 0 and it has no value below.
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}, 0.0);
+  c.add("b1", {"out", "0"}).expression = call("sqrt", {voltage("in")});
+  c.add("r1", {"out", "0"}, 1.0);
+  Model m(c, {});
+  padae::Load load;
+  load.f = Vector::Zero(m.size()), load.q = Vector::Zero(m.size());
+  load.df_dx.assign(m.pattern().nonzeros(), 0.0), load.dq_dx.assign(m.pattern().nonzeros(), 0.0);
+  Vector x = Vector::Zero(m.size());
+  load.jacobian_requested = false;
+  EXPECT_EQ(m.load(0, x, {}, load), padae::EvalStatus::ok);
+  load.jacobian_requested = true;
+  EXPECT_EQ(m.load(0, x, {}, load), padae::EvalStatus::outside_domain);
+  x[unknown(m, "v(in)")] = -1;
+  load.f.setZero(), load.q.setZero();
+  load.jacobian_requested = false;
+  EXPECT_EQ(m.load(0, x, {}, load), padae::EvalStatus::outside_domain);
+}
+
 }  // namespace
 }  // namespace mna::test

@@ -47,7 +47,8 @@ def netlist_of(case):
 
 def tight_max_step(case):
     """The tight run's maximum step: 1e-5 of the simulated span unless the case says otherwise."""
-    tran = sc.parse_tran(open(netlist_of(case)).read())
+    with open(netlist_of(case)) as f:
+        tran = sc.parse_tran(f.read())
     return case.get("tight_max_step", (tran.stop - tran.start) / 1e5)
 
 
@@ -106,6 +107,11 @@ def up(x, digits=2):
     return math.ceil(x / 10 ** e - 1e-9) * 10 ** e
 
 
+# No tolerance below the resolution of the numbers compared: ngspice writes 12 significant
+# digits (option numdgt=12), so relative differences under 1e-9 of the range are noise.
+DATA_FLOOR = 1e-9
+
+
 def tolerances(entry):
     """Tolerances of one case from its floor entry: twice ngspice's own error (default settings
     against the tight reference) plus twice the tight reference's own error (tight against
@@ -115,7 +121,7 @@ def tolerances(entry):
     tol = {"probes": {}, "crossing_dt": None}
     for probe, (mx, rms) in d["probes"].items():
         tmx, trms = tp.get(probe, (0.0, 0.0))
-        tol["probes"][probe] = (up(2 * (mx + tmx)), up(2 * (rms + trms)))
+        tol["probes"][probe] = (up(max(2 * (mx + tmx), DATA_FLOOR)), up(max(2 * (rms + trms), DATA_FLOOR)))
     if d.get("crossing"):
         tdt = (t.get("crossing") or {}).get("max_dt", 0.0)
         tol["crossing_dt"] = up(2 * (d["crossing"]["max_dt"] + tdt))

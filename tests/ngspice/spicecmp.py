@@ -271,7 +271,8 @@ def padsim_command(padsim, netlist, csv_path, probes, extra=()):
 
 
 def run_padsim(padsim, netlist_path, probes, workdir, extra=(), timeout=600):
-    tran = parse_tran(open(netlist_path).read())
+    with open(netlist_path) as f:
+        tran = parse_tran(f.read())
     os.makedirs(workdir, exist_ok=True)
     csv_path = os.path.join(workdir, "padsim.csv")
     if os.path.exists(csv_path):

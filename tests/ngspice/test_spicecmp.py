@@ -349,6 +349,27 @@ class NgspiceRuns(unittest.TestCase):
             sc.run_ngspice(deck, ["v(out)"], self.dir, ngspice=fake)
         self.assertIn("before tstop", str(ctx.exception))
 
+    def compare_with_fake_padsim(self, case, **env):
+        fake = os.path.join(HERE, "data", "fake_padsim.py")
+        saved = dict(os.environ)
+        os.environ.update({k: str(v) for k, v in env.items()})
+        try:
+            return rr.main(["compare", case, "--padsim", fake, "--padsim-args", "",
+                            "--ngspice", NGSPICE, "--workdir", self.dir])
+        finally:
+            os.environ.clear()
+            os.environ.update(saved)
+
+    def test_compare_accepts_ngspice_default_and_rejects_perturbations(self):
+        # The whole compare path with its floor-derived tolerances: ngspice's own default answer
+        # passes (it is the floor's "default"), a 1 % gain error or a 20 us delay does not.
+        self.assertEqual(self.compare_with_fake_padsim("rc_step"), 0)
+        self.assertEqual(self.compare_with_fake_padsim("rc_step", FAKE_PADSIM_SCALE=1.01), 1)
+        self.assertEqual(self.compare_with_fake_padsim("rc_step", FAKE_PADSIM_DELAY=20e-6), 1)
+        # A switching circuit: the comparator edges of the relaxation oscillator.
+        self.assertEqual(self.compare_with_fake_padsim("relaxation_oscillator"), 0)
+        self.assertEqual(self.compare_with_fake_padsim("relaxation_oscillator", FAKE_PADSIM_DELAY=20e-6), 1)
+
     def test_rc_step_against_closed_form(self):
         # The whole ngspice path (deck, wrdata, parsing, interpolation) against 1 - exp(-t/tau).
         w = sc.run_ngspice(os.path.join(ROOT, "circuits", "rc_step.cir"), ["v(out)"], self.dir,

@@ -274,7 +274,7 @@ def cmd_padsim_only(args, cases):
         wd = os.path.join(args.workdir, name)
         try:
             w = sc.run_padsim(args.padsim, netlist_of(case), case["probes"], wd,
-                              extra=case.get("padsim_args", []))
+                              extra=args.padsim_args.split() + case.get("padsim_args", []))
         except sc.SimulationFailure as e:
             print("%-24s FAILED: %s" % (name, e))
             status = 1
@@ -345,7 +345,7 @@ def main(argv=None):
     ap.add_argument("--workdir", default=os.path.join(os.getcwd(), "ngspice-regression"))
     ap.add_argument("--write", help="floor: write (update) the measurements in this JSON file")
     ap.add_argument("--padsim-args", default="--grid",
-                    help="compare: arguments for every padsim run (default --grid: rows also on the "
+                    help="compare, padsim-only: arguments for every padsim run (default --grid: rows also on the "
                          ".tran TSTEP grid from padsim's interpolating polynomial, the output "
                          "resolution ngspice's default maximum step gives)")
     ap.add_argument("--summary", help="compare: append one markdown table row per case to this file")

@@ -7,7 +7,8 @@ Pieces, each unit-tested in test_spicecmp.py:
   - padsim runs: `padsim NETLIST -o out.csv --probe "P1,P2"`, CSV read back;
   - comparison: linear interpolation onto the reference's time points, max and RMS absolute
     difference divided by the reference signal's range, per probe; threshold-crossing instants
-    (linear interpolation between the points on both sides) compared separately.
+    (linear interpolation between the points on both sides) compared separately; the max error
+    with a timing tolerance (tube_distance) so that an edge is not counted twice.
 """
 
 import csv

@@ -268,15 +268,18 @@ Integrator::Impl::Correction Integrator::Impl::correct(double t_new, Newton mode
   const int max_iterations = mode == Newton::full ? kMaxFullNewtonIterations : kMaxNewtonIterations;
   const double toldel = 1e-4 * kNewtonTolerance;
   double first_norm = 0, previous_norm = 0;
-  for (int m = 0;; ++m) {
-    ++statistics.newton_iterations;
-    const double cj_ratio = cj / cj_of_matrix;
+  auto newton_correction = [&]() {
     const Load& load = newton.load();
     residual = q_derivative_predicted + cj * (load.q - q_predicted) + load.f;
     for (int i : newton.auxiliary_unknowns()) residual[i] = x_new[i] - x_predicted[i];
     delta = residual;
     newton.solve(delta);
+    const double cj_ratio = cj / cj_of_matrix;
     if (cj_ratio != 1.0) delta *= 2.0 / (1.0 + cj_ratio);  // compensates the stale cj
+  };
+  for (int m = 0;; ++m) {
+    ++statistics.newton_iterations;
+    newton_correction();
     x_new -= delta;
     // Converged means every unknown within its tolerance, as circuit simulators require: an
     // algebraic current that steers a switch must not hide in an average.
@@ -289,23 +292,30 @@ Integrator::Impl::Correction Integrator::Impl::correct(double t_new, Newton mode
       converged = norm <= 1e-4 * toldel || (rate < kMaxConvergenceRate && rate / (1 - rate) * norm <= kNewtonTolerance);
     } else if (m == 0) {
       first_norm = norm;
-      converged = norm <= 1e-4 * toldel;
+      converged = norm <= 1e-4 * toldel || convergence_factor * norm <= kNewtonTolerance;
     } else {
       double rate = std::pow(norm / first_norm, 1.0 / m);
       if (rate > kMaxConvergenceRate) return Correction::diverged;
       convergence_factor = rate / (1 - rate);
+      converged = convergence_factor * norm <= kNewtonTolerance;
     }
     previous_norm = norm;
-    if (converged || (mode != Newton::full && convergence_factor * norm <= kNewtonTolerance)) break;
-    if (m + 1 >= max_iterations) return Correction::diverged;
-    if (mode == Newton::full) {
+    if (!converged && m + 1 >= max_iterations) return Correction::diverged;
+    if (mode == Newton::full && !converged) {
       if (Correction outcome = factor_here(); outcome != Correction::converged) return outcome;
-    } else if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) {
-      return Correction::outside_domain;
+      continue;
     }
+    // q at the new point, which the history needs exactly (charge conservation); the same
+    // evaluation checks that a convergence judged from a remembered rate really holds: the next
+    // correction must be within the tolerance too (a junction turning off inside the step
+    // breaks the linearization an earlier step's rate was measured on).
+    if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return Correction::outside_domain;
+    if (!converged) continue;
+    newton_correction();
+    if (weighted_max_norm(delta, inverse_weight_x) <= kNewtonTolerance) break;
+    convergence_factor = 20;
+    if (m + 1 >= max_iterations) return Correction::diverged;
   }
-  // q at the converged point: the history must hold q(x_n) exactly for charge conservation.
-  if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return Correction::outside_domain;
   q_new = newton.load().q;
   return Correction::converged;
 }

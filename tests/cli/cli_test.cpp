@@ -221,7 +221,7 @@ TEST_F(Cli, FailureKeepsTheWaveformAndSaysWhenAndWhy) {
   EXPECT_GT(last, 0.4e-3);
   EXPECT_LT(last, 0.5e-3 + 1e-9);
   // The rows kept are the waveform up to the failure (the accuracy is not what this checks).
-  for (const auto& row : csv.rows) EXPECT_NEAR(row[csv.column("v(out)")], std::sqrt(2 - 4 * row[0] / 1e-3), 1e-2);
+  for (const auto& row : csv.rows) EXPECT_NEAR(row[csv.column("v(out)")], std::sqrt(2 - 4 * row[0] / 1e-3), 1e-3);
 }
 
 TEST_F(Cli, RawFileReadsBackInNgspice) {
@@ -255,27 +255,28 @@ TEST_F(Cli, RawFileReadsBackInNgspice) {
 // and transit-time charge, then a slow sweep through reverse breakdown.
 TEST_F(Cli, ShockleyDiodeMatchesNgspice) {
   if (std::system("command -v ngspice > /dev/null 2>&1") != 0) GTEST_SKIP() << "ngspice not installed";
+  // ngspice runs with a small TMAX: its points are interpolated linearly at padsim's times.
   struct Case {
-    std::string circuit, probes;
+    std::string circuit, tran, ngspice_tran, probes;
     double tolerance;
   };
   const Case cases[] = {
       {"V1 in 0 SIN(0 12 200k)\nR1 in a 50\nD1 a out dz\nC1 out 0 10n\nR2 out 0 1k\n"
-       ".model dz D(is=1e-12 n=1.2 rs=0.5 cjo=50p vj=0.7 m=0.4 tt=20n)\n.tran 10n 20u\n",
-       "v(a) v(out) i(v1)", 5e-3},
-      {"V1 in 0 PWL(0 -15 1m 1.5)\nR1 in a 10\nD1 a 0 dz\n.model dz D(is=1e-12 n=1.2 rs=0.5 bv=10 ibv=1m)\n.tran 1u 1m\n",
-       "v(a) i(v1)", 1e-3},
+       ".model dz D(is=1e-12 n=1.2 rs=0.5 cjo=50p vj=0.7 m=0.4 tt=20n)\n",
+       ".tran 10n 20u\n", ".tran 10n 20u 0 1n\n", "v(a) v(out) i(v1)", 1e-3},
+      {"V1 in 0 PWL(0 -15 1m 1.5)\nR1 in a 10\nD1 a 0 dz\n.model dz D(is=1e-12 n=1.2 rs=0.5 bv=10 ibv=1m)\n",
+       ".tran 1u 1m\n", ".tran 1u 1m 0 0.1u\n", "v(a) i(v1)", 1e-5},
   };
   for (const Case& c : cases) {
     const std::string reference = path("ngspice.txt"), csv_path = path("padsim.csv");
-    const std::string deck = write("ng.cir", "* diode\n" + c.circuit +
+    const std::string deck = write("ng.cir", "* diode\n" + c.circuit + c.ngspice_tran +
                                                  ".options reltol=1e-7 abstol=1e-14 vntol=1e-10 method=gear\n"
                                                  ".control\nset wr_singlescale\nset wr_vecnames\noption numdgt=12\nrun\n"
                                                  "wrdata " + reference + " " + c.probes + "\nquit\n.endc\n.end\n");
     ASSERT_EQ(std::system(("ngspice -b " + deck + " > /dev/null 2>&1").c_str()), 0);
     std::string probes = c.probes;
     std::replace(probes.begin(), probes.end(), ' ', ',');
-    const Result r = run(write("pd.cir", "* diode\n" + c.circuit + ".end\n") + " --rtol 1e-7 --probe '" + probes +
+    const Result r = run(write("pd.cir", "* diode\n" + c.circuit + c.tran + ".end\n") + " --rtol 1e-7 --probe '" + probes +
                          "' -o " + csv_path);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const Csv csv = parse_csv(read(csv_path));

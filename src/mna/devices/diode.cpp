@@ -1,9 +1,10 @@
 // D: the junction diode with ngspice's equations (level 1: IS, N, RS, CJO, VJ, M, FC, TT, BV,
 // IBV, NBV, area), for regression against ngspice. The junction current, its charge and GMIN in
 // parallel are loaded at the junction voltage; RS adds an internal node.
-// Newton may try huge forward voltages: above EXPONENT_LIMIT thermal voltages the exponential
-// continues linearly (value and slope match), so f stays smooth and finite; ngspice limits the
-// iterate instead (pnjlim), which leaves converged solutions below that limit unchanged.
+// Newton may try huge forward voltages: where the junction current would pass 1 kA (or at 40
+// thermal voltages, whichever comes first) the exponential continues linearly, value and slope
+// matching, so f stays smooth and finite and Newton's overshoots stay moderate. ngspice limits
+// the iterate instead (pnjlim); solutions below that current are the same.
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -17,7 +18,8 @@ constexpr double boltzmann = 1.38064852e-23;   // ngspice 39 const.h
 constexpr double charge = 1.6021766208e-19;
 constexpr double nominal_temperature = 300.15; // 27 C
 constexpr double gmin = 1e-12;
-constexpr double exponent_limit = 40;
+constexpr double largest_exponent = 40;
+constexpr double largest_current = 1e3;  // amperes, before area: no diode here carries more
 
 class Diode final : public Device {
  public:
@@ -36,6 +38,8 @@ class Diode final : public Device {
     if (!(saturation_current_ > 0) || !(thermal_voltage_ > 0) || !(breakdown_thermal_voltage_ > 0) || !(series_resistance_ >= 0) ||
         !(junction_potential_ > 0) || !(grading_ < 1) || !(depletion_fraction_ < 1))
       throw ModelError("diode '" + spec.name + "': parameters out of range (IS, N > 0, RS >= 0, VJ > 0, M < 1, FC < 1)");
+    exponent_limit_ = std::min(largest_exponent, std::log(largest_current * area / saturation_current_));
+    if (!(exponent_limit_ > 1)) throw ModelError("diode '" + spec.name + "': IS too large");
     if (auto bv = spec.model.find("bv"); bv != spec.model.end() && std::isfinite(bv->second))
       breakdown_voltage_ = breakdown_knee(bv->second, parameter(spec, "ibv", 1e-3) * area, vt, run.reltol);
   }
@@ -98,9 +102,7 @@ class Diode final : public Device {
   std::pair<double, double> junction_current(double v) const {
     const double is = saturation_current_, vt = thermal_voltage_;
     if (v >= -3 * vt) {
-      const double x = v / vt;
-      const double ex = x > exponent_limit ? std::exp(exponent_limit) * (1 + x - exponent_limit) : std::exp(x);
-      const double dex = x > exponent_limit ? std::exp(exponent_limit) : std::exp(x);
+      const auto [ex, dex] = limited_exp(v / vt);
       return {is * (ex - 1), is * dex / vt};
     }
     if (!breakdown_voltage_ || v >= -*breakdown_voltage_) {
@@ -108,9 +110,8 @@ class Diode final : public Device {
       a = a * a * a;
       return {-is * (1 + a), is * 3 * a / v};
     }
-    const double vtb = breakdown_thermal_voltage_, x = -(*breakdown_voltage_ + v) / vtb;
-    const double ex = x > exponent_limit ? std::exp(exponent_limit) * (1 + x - exponent_limit) : std::exp(x);
-    const double dex = x > exponent_limit ? std::exp(exponent_limit) : std::exp(x);
+    const double vtb = breakdown_thermal_voltage_;
+    const auto [ex, dex] = limited_exp(-(*breakdown_voltage_ + v) / vtb);
     return {-is * ex, is * dex / vtb};
   }
 
@@ -130,6 +131,16 @@ class Diode final : public Device {
   }
 
  private:
+  // exp(x) and its slope, continued linearly above the exponent limit.
+  std::pair<double, double> limited_exp(double x) const {
+    if (x <= exponent_limit_) {
+      const double e = std::exp(x);
+      return {e, e};
+    }
+    const double e = std::exp(exponent_limit_);
+    return {e * (1 + x - exponent_limit_), e};
+  }
+
   // ngspice's knee (diotemp.c): the voltage where the breakdown current equals IBV, iterated
   // to RELTOL as there (vt: the thermal voltage without N, as there).
   double breakdown_knee(double bv, double ibv, double vt, double reltol) const {
@@ -147,6 +158,7 @@ class Diode final : public Device {
   std::vector<std::string> nodes_;
   double saturation_current_, thermal_voltage_, breakdown_thermal_voltage_, series_resistance_, junction_capacitance_;
   double junction_potential_, grading_, depletion_fraction_, transit_time_;
+  double exponent_limit_;
   std::optional<double> breakdown_voltage_;
   int anode_ = ground, cathode_ = ground, junction_ = ground;
   Stamper::Block junction_slots_, series_slots_;

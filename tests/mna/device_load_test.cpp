@@ -148,6 +148,21 @@ TEST(DeviceLoad, IdealSwitchBranchRows) {
   EXPECT_DOUBLE_EQ(off.f[a], 3 + 0.25);
 }
 
+TEST(DeviceLoad, IdealSwitchModelFlag) {
+  // IDEAL=1: RON = 0 and ROFF = infinite unless given.
+  CircuitSpec c;
+  c.add("v1", {"ctl", "0"}, 0.0);
+  c.add("s1", {"a", "0", "ctl", "0"}).model = {{"ideal", 1}};
+  c.add("r1", {"a", "0"}, 1.0);
+  Model m(c, {});
+  const int a = unknown(m, "v(a)"), i = unknown(m, "i(s1)");
+  ASSERT_GE(i, 0);
+  Vector x = Vector::Zero(m.size());
+  x[a] = 2, x[i] = 0.5;
+  EXPECT_DOUBLE_EQ(evaluate(m, 0, x, {1}).f[i], 2.0);   // closed: v(a) = 0
+  EXPECT_DOUBLE_EQ(evaluate(m, 0, x, {0}).f[i], -0.5);  // open: i = 0
+}
+
 TEST(DeviceLoad, IdealDiodeModeGuard) {
   CircuitSpec c;
   c.add("d1", {"a", "k"}).model = {{"ideal", 1}, {"vfwd", 0.7}, {"ron", 0.1}};

@@ -2,7 +2,8 @@
 // VT + VH, off below VT - VH, in between the state is kept. The state is an auxiliary unknown
 // (a mode that only events change); one predicate says "on" with a guard on the control:
 //     guard = state ? c - (VT - VH) : c - (VT + VH)
-// RON = 0 or ROFF = infinite make the switch ideal; then it carries a branch current i and its
+// RON = 0 or ROFF = infinite make the switch ideal (IDEAL=1 makes them the defaults, since a
+// netlist cannot write infinity); then it carries a branch current i and its
 // row reads alpha(p) (va - vb) - beta(p) i = 0 with (alpha, beta) = (1/R, 1), or (1, 0) for
 // R = 0, or (0, 1) for R = inf (conductance scaling keeps a large finite R well conditioned).
 #include <cmath>
@@ -18,7 +19,8 @@ class Switch final : public Device {
       : Device(spec.name), nodes_(spec.nodes), current_controlled_(current_controlled),
         threshold_(parameter(spec, current_controlled ? "it" : "vt", 0)),
         hysteresis_(parameter(spec, current_controlled ? "ih" : "vh", 0)),
-        on_resistance_(parameter(spec, "ron", 1)), off_resistance_(parameter(spec, "roff", 1e12)),
+        on_resistance_(parameter(spec, "ron", parameter(spec, "ideal", 0) != 0 ? 0 : 1)),
+        off_resistance_(parameter(spec, "roff", parameter(spec, "ideal", 0) != 0 ? infinity : 1e12)),
         initially_on_(spec.initially_on.value_or(false)) {
     require_nodes(spec, current_controlled ? 2 : 4);
     if (current_controlled) {

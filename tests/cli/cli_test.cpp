@@ -165,6 +165,33 @@ TEST_F(Cli, JumpGivesTwoRowsAtTheSameTimeAndIsLogged) {
     EXPECT_NE(r.err.find(key), std::string::npos) << key << " in " << r.err;
 }
 
+TEST_F(Cli, OpeningIdealSwitchHandsTheInductorCurrentToTheFreewheelingDiode) {
+  // From rest (uic), the switch opens at 1.0005 ms (control falls through 0.5 V); the diode takes
+  // the current in the same event, so i(l1) = (10 V / 5 ohm)(1 - exp(-t / 2 ms)) carries on,
+  // with no jump, and decays through the diode.
+  const std::string events = path("events.csv");
+  const Result r = run(write("freewheel.cir",
+                             "* freewheel\nVin in 0 10\nVctl ctl 0 PWL(0 1 1m 1 1.001m 0)\nS1 in a ctl 0 sw ON\n"
+                             "D1 0 a dd\nL1 a b 10m\nR1 b 0 5\n.model sw SW(ideal=1 vt=0.5)\n"
+                             ".model dd D(ideal=1)\n.tran 10u 2m uic\n.end\n") +
+                       " --probe 'i(l1),i(d1),v(a)' --events " + events + " --rtol 1e-6 -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv log = parse_csv(read(events));
+  ASSERT_EQ(log.rows.size(), 2u);
+  const std::string text = read(events);
+  EXPECT_NE(text.find(",s1,on,1,0,0"), std::string::npos) << text;
+  EXPECT_NE(text.find(",d1,conducting,0,1,0"), std::string::npos) << text;
+  const double t_open = 1.0005e-3, i_open = 2 * (1 - std::exp(-t_open / 2e-3));
+  EXPECT_NEAR(log.rows[0][0], t_open, 1e-12);
+  const Csv csv = parse_csv(r.out);
+  for (const auto& row : csv.rows) {
+    const double t = row[0];
+    const double expected = t <= t_open ? 2 * (1 - std::exp(-t / 2e-3)) : i_open * std::exp(-(t - t_open) / 2e-3);
+    EXPECT_NEAR(row[1], expected, 1e-5) << "t = " << t;
+    if (t > t_open) EXPECT_NEAR(row[2], row[1], 1e-9) << "t = " << t;  // all of it through the diode
+  }
+}
+
 TEST_F(Cli, BadInputExitsWithTwo) {
   EXPECT_EQ(run(path("missing.cir")).exit_code, 2);
   EXPECT_EQ(run("").exit_code, 2);

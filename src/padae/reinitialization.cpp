@@ -7,9 +7,9 @@ namespace padae {
 
 namespace {
 
-constexpr int kMaxIterations = 40;
+constexpr int kMaxIterations = 100;          // junctions far from their solution need many
 constexpr double kConvergedNorm = 1e-3;     // Newton correction, in tolerance units
-constexpr double kRefactorRate = 0.25;      // refactor when Newton contracts slower than this
+constexpr double kRefactorRate = 0.1;       // refactor when Newton contracts slower than this
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 }  // namespace

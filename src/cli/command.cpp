@@ -145,6 +145,8 @@ class Session {
       return bad_input;
     }
     title_ = flat->title;
+    if (flat->temperature && *flat->temperature != 27 && !options_.quiet)
+      fmt::print(stderr, "padsim: warning: .temp {} ignored: devices are simulated at 27 C\n", *flat->temperature);
     settings_.tstop = options_.tstop.value_or(flat->tran ? flat->tran->stop : 0);
     settings_.tstep = flat->tran && flat->tran->step > 0 ? flat->tran->step : settings_.tstop / 50;
     tstart_ = flat->tran ? flat->tran->start : 0;

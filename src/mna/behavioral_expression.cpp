@@ -24,18 +24,22 @@ std::string describe(const netlist::Expression& e) {
     std::string operator()(const netlist::BranchCurrent& i) const { return "i(" + i.element + ")"; }
     std::string operator()(const netlist::Time&) const { return "time"; }
     std::string operator()(const netlist::Unary& u) const {
-      return (u.op == netlist::UnaryOperator::negate ? "-" : "!") + describe(*u.operand);
+      std::string text = u.op == netlist::UnaryOperator::negate ? "-" : "!";
+      return text += describe(*u.operand);
     }
     std::string operator()(const netlist::Binary& b) const {
       static const char* symbols[] = {"+", "-", "*", "/", "^", "<", "<=", ">", ">=", "==", "!=", "&&", "||"};
-      return "(" + describe(*b.left) + symbols[static_cast<int>(b.op)] + describe(*b.right) + ")";
+      // Built by appending: GCC 12 warns falsely (-Wrestrict) on "literal" + std::string.
+      std::string text = "(";
+      return text.append(describe(*b.left)).append(symbols[static_cast<int>(b.op)]).append(describe(*b.right)).append(")");
     }
     std::string operator()(const netlist::Conditional& c) const {
-      return "(" + describe(*c.condition) + "?" + describe(*c.if_true) + ":" + describe(*c.if_false) + ")";
+      std::string text = "(";
+      return text.append(describe(*c.condition)).append("?").append(describe(*c.if_true)).append(":").append(describe(*c.if_false)).append(")");
     }
     std::string operator()(const netlist::Call& c) const {
       std::string text = c.function + "(";
-      for (std::size_t k = 0; k < c.arguments.size(); ++k) text += (k ? "," : "") + describe(*c.arguments[k]);
+      for (std::size_t k = 0; k < c.arguments.size(); ++k) text.append(k ? "," : "").append(describe(*c.arguments[k]));
       return text + ")";
     }
   };

@@ -390,8 +390,8 @@ class Elaborator {
          {ModelType::diode,
           {"is", "n", "rs", "cjo", "cj0", "vj", "m", "tt", "bv", "ibv", "eg", "xti", "fc", "ideal",
            "ron", "roff", "vfwd"}}},
-        {"sw", {ModelType::voltage_switch, {"vt", "vh", "ron", "roff"}}},
-        {"csw", {ModelType::current_switch, {"it", "ih", "ron", "roff"}}},
+        {"sw", {ModelType::voltage_switch, {"vt", "vh", "ron", "roff", "ideal"}}},
+        {"csw", {ModelType::current_switch, {"it", "ih", "ron", "roff", "ideal"}}},
     };
     auto type = known.find(card.type.text);
     if (type == known.end()) {

@@ -188,7 +188,9 @@ TEST_F(Cli, OpeningIdealSwitchHandsTheInductorCurrentToTheFreewheelingDiode) {
     const double t = row[0];
     const double expected = t <= t_open ? 2 * (1 - std::exp(-t / 2e-3)) : i_open * std::exp(-(t - t_open) / 2e-3);
     EXPECT_NEAR(row[1], expected, 1e-5) << "t = " << t;
-    if (t > t_open) EXPECT_NEAR(row[2], row[1], 1e-9) << "t = " << t;  // all of it through the diode
+    if (t > t_open) {
+      EXPECT_NEAR(row[2], row[1], 1e-9) << "t = " << t;  // all of it through the diode
+    }
   }
 }
 
@@ -219,7 +221,9 @@ TEST_F(Cli, GridAddsInterpolatedRowsOnTheTstepGrid) {
   std::size_t on_grid = 0;
   for (std::size_t k = 0; k < csv.rows.size(); ++k) {
     const double t = csv.rows[k][0];
-    if (k > 0) EXPECT_GT(t, csv.rows[k - 1][0]);
+    if (k > 0) {
+      EXPECT_GT(t, csv.rows[k - 1][0]);
+    }
     const double n = std::round(t / 10e-6);
     if (std::abs(t - n * 10e-6) < 1e-15) ++on_grid;
     EXPECT_NEAR(csv.rows[k][2], 1 - std::exp(-t / 1e-3), 1e-4) << "t = " << t;  // interpolated rows too

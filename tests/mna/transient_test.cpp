@@ -159,7 +159,7 @@ TEST(Jump, ThreeCapacitorsTwoSwitchesClosingAtOnce) {
   CircuitSpec c;
   ramp_control(c, 0, 1);
   const char* nodes[] = {"a", "b", "d"};
-  for (int k = 0; k < 3; ++k) c.add("c" + std::to_string(k + 1), {nodes[k], "0"}, cs[k]).initial_condition = vs[k];
+  for (int k = 0; k < 3; ++k) c.add(std::string("c").append(std::to_string(k + 1)), {nodes[k], "0"}, cs[k]).initial_condition = vs[k];
   ideal_switch(c, "s1", "a", "b");
   ideal_switch(c, "s2", "b", "d");
   Model m(c, {.tstep = 1e-5, .tstop = 2e-3});

@@ -693,9 +693,8 @@ bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   s.x = x0;
   s.p = p0;
   s.h = 0;
-  s.statistics.events = 0;
-  // The initial point is made consistent like an event with no flips (flips the fixed point
-  // finds are real flips at t0).
+  // The initial point is made consistent as an event is (jump projection, predicate fixed
+  // point); that is the start, not an event, so it is neither counted nor recorded.
   if (!s.settle(t0, x0, p0, true)) return false;
   s.statistics.events = 0;
   s.statistics.jumps = 0;

@@ -405,7 +405,7 @@ auto const additive_def =
     multiplicative[assign] >> *((lit('+') > multiplicative)[make_binary<BinaryOperator::add>] |
                                 (lit('-') > multiplicative)[make_binary<BinaryOperator::subtract>]);
 auto const multiplicative_def =
-    unary[assign] >> *((lit('*') >> !lit('*') > unary)[make_binary<BinaryOperator::multiply>] |
+    unary[assign] >> *(((lit('*') >> !lit('*')) > unary)[make_binary<BinaryOperator::multiply>] |
                        (lit('/') > unary)[make_binary<BinaryOperator::divide>]);
 auto const minus_token_def = x3::raw[lit('-')];
 auto const not_token_def = x3::raw[lit('!')];
@@ -430,7 +430,7 @@ auto const branch_current_def =
     (current_open > source_name > closing_paren)
         [make_branch_current];
 auto const arguments_def = -(expression % ',');
-auto const call_def = (identifier >> '(' > arguments > closing_paren)[make_call];
+auto const call_def = ((identifier >> '(') > arguments > closing_paren)[make_call];
 
 // A value in a position: a number, {expression} or 'expression'.
 auto const value_def = number[assign] | (lit('{') > expression > '}')[assign] |
@@ -441,8 +441,8 @@ x3::rule<class parameter_id, ast::Assignment> const parameter = "name=value";
 x3::rule<class params_keyword_id> const params_keyword = "params:";
 // Instance and model parameters take values; .param, subcircuit and instance parameters take
 // expressions (braces optional).
-auto const assignment_def = identifier >> '=' > value;
-auto const parameter_def = identifier >> '=' > expression;
+auto const assignment_def = (identifier >> '=') > value;
+auto const parameter_def = (identifier >> '=') > expression;
 auto const params_keyword_def = lexeme[no_case[lit("params:")]];
 
 // ---- element cards -------------------------------------------------------------------------
@@ -480,7 +480,7 @@ auto const waveform_kind_def =
 auto const dc_word_def = x3::raw[keyword("dc")][make_word];
 auto const ac_word_def = x3::raw[keyword("ac")][make_word];
 auto const waveform_spec_def =
-    waveform_kind >> '(' > *(value >> -lit(',')) > closing_paren > *assignment;
+    (waveform_kind >> '(') > *(value >> -lit(',')) > closing_paren > *assignment;
 auto const dc_spec_def = (dc_word > value)[make_dc_spec];
 auto const ac_spec_def = (ac_word > value > -value)[make_ac_spec];
 auto const bare_spec_def = value[make_bare_spec];
@@ -558,7 +558,7 @@ auto const option_item_def = (identifier >> -('=' > option_value))[make_option];
 auto const options_card_def = directive > *option_item > end_of_card;
 auto const output_function_def = x3::raw[lexeme[+x3::alpha >> &lit('(')]][make_word];
 auto const node_list_def = node % ',';
-auto const output_call_def = output_function >> '(' > node_list > closing_paren;
+auto const output_call_def = (output_function >> '(') > node_list > closing_paren;
 auto const output_word_def = x3::attr(ast::Word{}) >> x3::repeat(1)[node];
 auto const output_item_def = output_call | output_word;
 auto const output_card_def = directive > *output_item > end_of_card;

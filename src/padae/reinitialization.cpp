@@ -10,7 +10,13 @@ namespace {
 constexpr int kMaxIterations = 100;          // junctions far from their solution need many
 constexpr double kConvergedNorm = 1e-3;     // Newton correction, in tolerance units
 constexpr double kRefactorRate = 0.1;       // refactor when Newton contracts slower than this
+constexpr int kMaxStalled = 4;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
+// The settling steps' length, relative to the integrator's step: short enough that the
+// extrapolation's O(h^2) error is far below a step's local error, long enough that the steps'
+// conditioning is within 1e3 of the integrator's own.
+constexpr double kSettleFraction = 1e-3;
+constexpr double kSettleAccuracy = 1e-2;  // extrapolation error, in units of the error tolerance
 
 }  // namespace
 
@@ -38,6 +44,7 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
 
   double previous_norm = std::numeric_limits<double>::infinity();
   bool refactor = true;
+  int stalled = 0;  // consecutive iterations with a fresh Jacobian that did not contract
   for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
     if (refactor) {
       auto outcome = factor();
@@ -74,6 +81,8 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     }
     if (norm <= kConvergedNorm) return true;
     double rate = norm / previous_norm;
+    stalled = refactor && rate >= 1 ? stalled + 1 : 0;
+    if (stalled >= kMaxStalled) break;  // round-off level of an ill-conditioned matrix, or no root
     refactor = rate > kRefactorRate;
     previous_norm = norm;
     failure_unknown_ = worst;
@@ -118,64 +127,128 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
     return std::nullopt;
   }
   const Vector q_before = newton_.load().q;
-  const double h_impulse = 16 * kEps * std::max(std::abs(t), options_.time_scale);
-  Vector x_plus = x_start;
-  if (!backward_euler_with_continuation(t, h_impulse, q_before, p_from, p_to, x_plus))
+  // The impulse step is as short as the time resolution allows. Where Newton fails on it
+  // (a capacitor without a DC path of its own: C/h swamps every conductance in double
+  // precision, the matrix is singular or the iteration stalls at round-off) it is lengthened up
+  // to the settling step: its charges stay exact either way, since LU is backward stable, and
+  // the settling steps fix the algebraic directions.
+  const double h_settle = settle_step(t, h_reference);
+  const double h_vanishing = 16 * kEps * std::max(std::abs(t), options_.time_scale);
+  Vector x_plus;
+  double h_impulse = 0;
+  // Lengthening is cheap and cures conditioning; continuation in the modes cures a nonlinear
+  // start (a junction far from its new operating point): lengths first, then continuation.
+  for (bool continuation : {false, true}) {
+    for (h_impulse = h_vanishing;; h_impulse = std::min(1e3 * h_impulse, h_settle)) {
+      x_plus = x_start;
+      bool solved = continuation
+                        ? backward_euler_with_continuation(t, h_impulse, q_before, p_from, p_to, x_plus)
+                        : backward_euler(t, h_impulse, q_before, x_start, p_from, p_to, 1.0, x_plus);
+      if (solved) break;
+      if (h_impulse >= h_settle) {
+        h_impulse = 0;
+        break;
+      }
+    }
+    if (h_impulse > 0 || p_from == p_to) break;
+  }
+  if (h_impulse == 0) return std::nullopt;
+  if (newton_.evaluate(t, x_plus, p_to) != EvalStatus::ok) {
+    failure_reason_ = "the model cannot be evaluated after the event";
     return std::nullopt;
-  auto consistent = derivatives(t, x_plus, p_to, h_reference);
+  }
+  const Vector q_plus = newton_.load().q;
+  auto consistent = settle(t, x_plus, q_plus, p_to, h_settle);
   if (!consistent) return consistent;
   consistent->impulse = h_impulse * x_plus;
   // A jump moves q by far more than the smooth motion does over the impulse step.
   for (Eigen::Index i = 0; i < q_before.size(); ++i) {
-    double moved = std::abs(consistent->q[i] - q_before[i]);
+    double moved = std::abs(q_plus[i] - q_before[i]);
     double smooth = 10 * h_impulse * std::abs(consistent->q_derivative[i]);
-    double scale = std::abs(consistent->q[i]) + std::abs(q_before[i]);
+    double scale = std::abs(q_plus[i]) + std::abs(q_before[i]);
     if (moved > smooth + 1e-10 * scale + std::numeric_limits<double>::min()) consistent->charges_moved = true;
   }
   return consistent;
 }
 
+double Reinitializer::settle_step(double t, double h_reference) const {
+  return std::max(kSettleFraction * h_reference, 1e6 * kEps * std::max(std::abs(t), options_.time_scale));
+}
+
+// Backward-Euler steps from the charges after the jump, of lengths h, 2h and 4h, and their
+// polynomial extrapolation to h = 0: the state at t + 0 with the algebraic unknowns (and the
+// hidden algebraic directions of floating capacitors) consistent, accurate to O(h^3), while the
+// steps stay well conditioned. A mode faster than the steps (a switch's RC of a nanosecond
+// against microsecond steps) is not polynomial over them: the difference between the quadratic
+// and the linear extrapolation shows it, and h is shortened until it is resolved.
+std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_plus,
+                                                     const Vector& q_plus, const Predicates& p,
+                                                     double h) {
+  const double h_shortest = 1e4 * kEps * std::max(std::abs(t), options_.time_scale);
+  const Vector inverse_weight =
+      (options_.rtol * x_plus.cwiseAbs() + absolute_tolerance_).cwiseInverse();
+  auto weighted_max = [&](const Vector& v, bool differential_only) {
+    double norm = 0;
+    for (int i = 0; i < system_.size(); ++i)
+      if (!differential_only || system_.kind(i) == UnknownKind::differential)
+        norm = std::max(norm, std::abs(v[i]) * inverse_weight[i]);
+    return norm;
+  };
+  Vector x_one, x_two, x_four, extrapolated;
+  for (;; h *= 1e-3) {
+    x_one = x_plus;
+    if (!backward_euler_with_continuation(t + h, h, q_plus, p, p, x_one)) return std::nullopt;
+    x_two = x_one;
+    if (!backward_euler_with_continuation(t + 2 * h, 2 * h, q_plus, p, p, x_two)) return std::nullopt;
+    x_four = x_two;
+    if (!backward_euler_with_continuation(t + 4 * h, 4 * h, q_plus, p, p, x_four)) return std::nullopt;
+    // Lagrange weights of the nodes h, 2h, 4h at 0; the linear extrapolation is 2 x1 - x2.
+    extrapolated = (8 * x_one - 6 * x_two + x_four) / 3;
+    const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
+    if (weighted_max(curvature, false) <= kSettleAccuracy || h * 1e-3 < h_shortest) break;
+  }
+  ConsistentState state;
+  state.x_impulse = x_plus;
+  state.x = extrapolated;
+  // The vanishing step's differential unknowns are exact where it was well conditioned, and
+  // the extrapolation agrees with them to Newton's tolerance; where they differ by more than a
+  // tenth of the error tolerance the vanishing step lost the hidden algebraic directions.
+  if (weighted_max(x_plus - extrapolated, true) <= 0.1)
+    for (int i = 0; i < system_.size(); ++i)
+      if (system_.kind(i) == UnknownKind::differential) state.x[i] = x_plus[i];
+  if (!derivatives_at(t, p, state)) return std::nullopt;
+  state.x_derivative = (x_one - state.x) / h;
+  state.t_heading = t + h;
+  state.x_heading = x_one;
+  return state;
+}
+
 std::optional<ConsistentState> Reinitializer::derivative_only(double t, const Vector& x,
                                                               const Predicates& p,
                                                               double h_reference) {
-  return derivatives(t, x, p, h_reference);
+  ConsistentState state;
+  state.x_impulse = x;
+  state.x = x;
+  if (!derivatives_at(t, p, state)) return std::nullopt;
+  const double h = settle_step(t, h_reference);
+  state.x_heading = x;
+  if (!backward_euler_with_continuation(t + h, h, state.q, p, p, state.x_heading))
+    return std::nullopt;
+  state.t_heading = t + h;
+  state.x_derivative = (state.x_heading - x) / h;
+  return state;
 }
 
-std::optional<ConsistentState> Reinitializer::derivatives(double t, const Vector& x_plus,
-                                                          const Predicates& p,
-                                                          double h_reference) {
-  if (newton_.evaluate(t, x_plus, p) != EvalStatus::ok) {
-    failure_reason_ = "the model cannot be evaluated after the event";
-    return std::nullopt;
-  }
-  ConsistentState state;
-  const Vector q_plus = newton_.load().q;  // a copy: the Newton iterations below reload
-  // Algebraic unknowns may carry impulses in x_plus; their consistent values are those a very
-  // short step reaches (within 1e-8 of a step of t).
-  const double t_floor = std::max(std::abs(t), options_.time_scale);
-  const double h_settle = std::max(1e-8 * h_reference, 1e4 * kEps * t_floor);
-  Vector x_settled = x_plus;
-  if (!backward_euler_with_continuation(t + h_settle, h_settle, q_plus, p, p, x_settled))
-    return std::nullopt;
-  state.x_impulse = x_plus;
-  state.x = x_plus;
-  for (int i = 0; i < system_.size(); ++i)
-    if (system_.kind(i) == UnknownKind::algebraic) state.x[i] = x_settled[i];
+// q and its right derivative -f (dynamic rows) at the consistent state.x.
+bool Reinitializer::derivatives_at(double t, const Predicates& p, ConsistentState& state) {
   if (newton_.evaluate(t, state.x, p) != EvalStatus::ok) {
     failure_reason_ = "the model cannot be evaluated after the event";
-    return std::nullopt;
+    return false;
   }
   state.q = newton_.load().q;
   state.q_derivative = -newton_.load().f;
   newton_.keep_dynamic_rows(state.q_derivative);
-  // Its truncation error in h x' is about 1e-3 of the first step's own local error.
-  const double h_look = std::max(1e-3 * h_reference, 1e6 * kEps * t_floor);
-  state.x_heading = state.x;
-  if (!backward_euler_with_continuation(t + h_look, h_look, state.q, p, p, state.x_heading))
-    return std::nullopt;
-  state.t_heading = t + h_look;
-  state.x_derivative = (state.x_heading - state.x) / h_look;
-  return state;
+  return true;
 }
 
 }  // namespace padae

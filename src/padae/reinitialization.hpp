@@ -8,11 +8,13 @@
 // Its impulsive unknowns carry the charge (or flux) that moved, so charge is conserved on every
 // cut-set and flux on every loop, whatever the topology. padae takes the step with h a few
 // ulps of t: below the time resolution, so the state it reaches is the state at t + 0.
-// A second, very short backward-Euler step settles the algebraic unknowns (impulsive in the
-// first); the right derivative of q is then -f at that consistent state (the BDF restarts at
-// order 1 from it). A third, longer look-ahead step shows where the new motion is heading
-// (convention (9) applied to the new mode): long enough for the motion to be resolved above
-// round-off, short against the step size.
+// Backward-Euler steps of lengths h, 2h and 4h from the charges after the jump, with h about
+// 1e-3 of the integrator's step, settle the algebraic unknowns (impulsive in the first step);
+// their extrapolation to h = 0 is the consistent state at t + 0, and the
+// right derivative of q is -f there (the BDF restarts at order 1 from it). The first step also
+// shows where the new motion is heading (convention (9) applied to the new mode). The settling
+// steps are long enough to be well conditioned where the vanishing step is not (a capacitor
+// without a DC path: C/h swamps its conductances), and the extrapolation keeps them accurate.
 // When Newton fails on the new mode, the paper's continuation in a parameter blends the
 // residuals of the old and the new mode.
 #pragma once
@@ -61,8 +63,10 @@ class Reinitializer {
   bool backward_euler_with_continuation(double t_eval, double h, const Vector& q_start,
                                         const Predicates& p_from, const Predicates& p_to,
                                         Vector& x);
-  std::optional<ConsistentState> derivatives(double t, const Vector& x_plus, const Predicates& p,
-                                             double h_reference);
+  double settle_step(double t, double h_reference) const;
+  std::optional<ConsistentState> settle(double t, const Vector& x_plus, const Vector& q_plus,
+                                        const Predicates& p, double h);
+  bool derivatives_at(double t, const Predicates& p, ConsistentState& state);
 
   System& system_;
   NewtonMatrix& newton_;

@@ -110,6 +110,27 @@ TEST(Transient, SeriesRlcRingsDown) {
   }
 }
 
+TEST(Start, FloatingCapacitorRunFarShorterThanItsTimeConstant) {
+  // V1 - R1 - C1 - R2 - ground with uic, simulated for 1e-3 of RC: the capacitor has no DC path
+  // of its own, so C/h of a vanishing step swamps the conductances in double precision. The
+  // node voltages still follow i = V/(R1+R2) e^(-t/((R1+R2)C)) from the consistent start.
+  const double r = 1e3, cap = 1e-6, tstop = 1e-6;
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}, 1.0);
+  c.add("r1", {"in", "a"}, r);
+  c.add("c1", {"a", "b"}, cap).initial_condition = 0.0;
+  c.add("r2", {"b", "0"}, r);
+  Model m(c, {.tstep = 2e-8, .tstop = tstop});
+  const Simulation run = simulate(m, tstop, true);
+  ASSERT_TRUE(run.ok) << run.failure;
+  const int a = unknown(m, "v(a)"), b = unknown(m, "v(b)");
+  for (std::size_t k = 0; k < run.times.size(); ++k) {
+    const double current = 1 / (2 * r) * std::exp(-run.times[k] / (2 * r * cap));
+    EXPECT_NEAR(run.states[k][a], 1 - r * current, 1e-9) << "t = " << run.times[k];
+    EXPECT_NEAR(run.states[k][b], r * current, 1e-9) << "t = " << run.times[k];
+  }
+}
+
 TEST(Jump, TwoCapacitorsShareCharge) {
   const double c1 = 1e-6, c2 = 2e-6, v1 = 5, v2 = 1;
   CircuitSpec c;

@@ -11,6 +11,7 @@ Pieces, each unit-tested in test_spicecmp.py:
     with a timing tolerance (tube_distance) so that an edge is not counted twice.
 """
 
+import bisect
 import csv
 import io
 import math
@@ -373,18 +374,18 @@ def tube_distance(t_ref, y_ref, t_test, y_test, tau):
     """For each reference point (t, y): the distance from y to the values the test waveform
     (piecewise linear) takes within [t - tau, t + tau]; 0 when y is among them. tau = 0 gives the
     plain |test(t) - y|. An edge that the test places up to tau away from the reference's costs
-    nothing; anything else does."""
-    if tau <= 0:
+    nothing; anything else does. tau: one value, or one per reference point."""
+    taus = tau if isinstance(tau, list) else [tau] * len(t_ref)
+    if max(taus, default=0.0) <= 0:
         return [abs(a - b) for a, b in zip(interpolate(t_test, y_test, t_ref), y_ref)]
-    left = interpolate(t_test, y_test, [t - tau for t in t_ref])
-    right = interpolate(t_test, y_test, [t + tau for t in t_ref])
-    out, lo_i, n = [], 0, len(t_test)
+    left = interpolate(t_test, y_test, [t - w for t, w in zip(t_ref, taus)])
+    right = interpolate(t_test, y_test, [t + w for t, w in zip(t_ref, taus)])
+    out, n = [], len(t_test)
     for k, t in enumerate(t_ref):
+        w = taus[k]
         lo, hi = min(left[k], right[k]), max(left[k], right[k])
-        while lo_i < n and t_test[lo_i] <= t - tau:
-            lo_i += 1
-        i = lo_i
-        while i < n and t_test[i] < t + tau:
+        i = bisect.bisect_right(t_test, t - w)
+        while i < n and t_test[i] < t + w:
             v = y_test[i]
             if v < lo:
                 lo = v
@@ -396,21 +397,35 @@ def tube_distance(t_ref, y_ref, t_test, y_test, tau):
     return out
 
 
+def jump_slack(t_jumping, t_other):
+    """Per point of a waveform that records jumps as two rows at one time: at a jump row, the
+    width of the other waveform's sampling interval containing that time (where a jump lies
+    inside one sampling interval of the other simulator is unknowable: its linear interpolation
+    there is a ramp); 0 elsewhere."""
+    slack, n = [], len(t_jumping)
+    for k, t in enumerate(t_jumping):
+        at_jump = (k > 0 and t_jumping[k - 1] == t) or (k + 1 < n and t_jumping[k + 1] == t)
+        j = bisect.bisect_right(t_other, t)
+        inside = 0 < j < len(t_other)
+        slack.append(t_other[j] - t_other[j - 1] if at_jump and inside else 0.0)
+    return slack
+
+
 def waveform_error(t_ref, y_ref, t_test, y_test, tau=0.0):
     """(max, rms) of the test waveform's error on the reference's time points, divided by the
     reference's range. RMS: |test(t) - ref(t)|, time-weighted (trapezoid over the reference's
     non-uniform points). Max: the tube distance with time tolerance tau (see tube_distance), in
-    both directions (reference points against the test, test points against the reference)."""
+    both directions (reference points against the test, test points against the reference); a
+    test point at a jump also tolerates the reference's sampling interval around it
+    (jump_slack)."""
     y_int = interpolate(t_test, y_test, t_ref)
     scale = signal_range(y_ref)
     diffs = [abs(a - b) for a, b in zip(y_int, y_ref)]
-    if tau <= 0:
-        max_err = max(diffs) / scale
-    else:
-        # Both ways: every reference point near the test's values and every test point near the
-        # reference's, so neither an edge nor a spike of either one is lost.
-        max_err = max(max(tube_distance(t_ref, y_ref, t_test, y_test, tau)),
-                      max(tube_distance(t_test, y_test, t_ref, y_ref, tau))) / scale
+    # Both ways: every reference point near the test's values and every test point near the
+    # reference's, so neither an edge nor a spike of either one is lost.
+    test_tau = [tau + s for s in jump_slack(t_test, t_ref)]
+    max_err = max(max(tube_distance(t_ref, y_ref, t_test, y_test, tau)),
+                  max(tube_distance(t_test, y_test, t_ref, y_ref, test_tau))) / scale
     total, acc = t_ref[-1] - t_ref[0], 0.0
     for k in range(1, len(t_ref)):
         acc += 0.5 * (diffs[k] ** 2 + diffs[k - 1] ** 2) * (t_ref[k] - t_ref[k - 1])

@@ -128,6 +128,25 @@ class ErrorMetrics(unittest.TestCase):
         d = sc.tube_distance([1.0], [5.0], [0.0, 2.0], [0.0, 2.0], 0.5)
         self.assertAlmostEqual(d[0], 3.5)  # the test spans [0.5, 1.5] around t = 1
 
+    def test_jump_inside_a_reference_sampling_interval(self):
+        # The test jumps from 1 to 0 at t = 0.5 (two rows); the reference samples 0.49 and 0.51,
+        # so its linear interpolation at 0.5 is 0.5: the jump rows are compared with the
+        # reference's values over that sampling interval, every other point as usual.
+        t_ref = [k * 0.02 + 0.01 for k in range(50)]
+        ref = [1.0 if x < 0.5 else 0.0 for x in t_ref]
+        t_test = [k * 0.1 for k in range(6)] + [0.5] + [0.5 + k * 0.1 for k in range(1, 6)]
+        test = [1.0] * 6 + [0.0] * 6
+        slack = sc.jump_slack(t_test, t_ref)
+        self.assertAlmostEqual(slack[5], 0.02)
+        self.assertAlmostEqual(slack[6], 0.02)
+        self.assertEqual(slack[4], 0.0)
+        mx, _ = sc.waveform_error(t_ref, ref, t_test, test)
+        self.assertEqual(mx, 0.0)
+        # A spike elsewhere still counts in full.
+        test[2] = 0.7
+        mx, _ = sc.waveform_error(t_ref, ref, t_test, test)
+        self.assertAlmostEqual(mx, 0.3)
+
     def test_time_tolerance_only_affects_max(self):
         t = [k * 0.01 for k in range(101)]
         ref = [0.0 if x < 0.5 - 1e-9 else 1.0 for x in t]

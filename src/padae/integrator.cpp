@@ -596,18 +596,28 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       return false;
     }
     if (predicate_count == 0) break;
-    // Convention (9) for the new mode: a predicate that flipped here is judged where the new
-    // motion is heading (just after t); the others on the jump itself, impulses included (the
-    // voltage spike of a broken inductor current turns a freewheeling diode on).
-    Vector guards_after(predicate_count), guards_heading(predicate_count);
+    // Convention (9) for the new mode. A predicate that flipped here is judged by where the new
+    // motion is heading (just after t): its new guard starts at zero up to the old guard's
+    // resolution, amplified by the new mode (an ideal diode's current is its voltage error
+    // over RON), so the flip stands unless the guard is both on the other side and moving away.
+    // The others are judged on the jump itself, impulses included (the voltage spike of a broken
+    // inductor current turns a freewheeling diode on).
+    Vector guards_after(predicate_count), guards_start(predicate_count), guards_heading(predicate_count);
     if (!evaluate_guards(t_at, consistent->x_impulse, guards_after) ||
+        !evaluate_guards(t_at, consistent->x, guards_start) ||
         !evaluate_guards(consistent->t_heading, consistent->x_heading, guards_heading)) {
       failure = Failure{t_at, "a guard function cannot be evaluated after the event at t = " + format_time(t_at), -1};
       return false;
     }
     Predicates next = p;
-    for (int k = 0; k < predicate_count; ++k)
-      next[k] = (flipped_here[k] ? guards_heading[k] : guards_after[k]) > 0;
+    for (int k = 0; k < predicate_count; ++k) {
+      if (!flipped_here[k]) {
+        next[k] = guards_after[k] > 0;
+        continue;
+      }
+      const bool on_side = guards_heading[k] > 0, rising = guards_heading[k] > guards_start[k];
+      next[k] = p[k] ? (on_side || rising) : (on_side && rising);
+    }
     if (next == p) break;
     target = next;
   }
@@ -645,6 +655,11 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
     double rate = weighted_norm(consistent.q_derivative, inverse_weight_q, options.norm);
     if (h_new * rate > 0.5) h_new = 0.5 / rate;
   }
+  // Order 1's local error, h^2 q'' / 2, within half a tolerance (unless the caller chose the
+  // initial step): after an event the previous step may be far too long for a fast mode the
+  // new motion starts with.
+  double curvature = weighted_norm(consistent.q_second_derivative, inverse_weight_q, options.norm);
+  if ((h > 0 || options.initial_step <= 0) && h_new * h_new * curvature > 1) h_new = 1 / std::sqrt(curvature);
   if (options.max_step > 0) h_new = std::min(h_new, options.max_step);
   h_new = std::max(h_new, minimum_step());
   h = h_new;

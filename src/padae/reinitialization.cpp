@@ -10,7 +10,6 @@ namespace {
 constexpr int kMaxIterations = 100;          // junctions far from their solution need many
 constexpr double kConvergedNorm = 1e-3;     // Newton correction, in tolerance units
 constexpr double kRefactorRate = 0.1;       // refactor when Newton contracts slower than this
-constexpr int kMaxStalled = 4;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 // The settling steps' length, relative to the integrator's step: short enough that the
 // extrapolation's O(h^2) error is far below a step's local error, long enough that the steps'
@@ -44,7 +43,6 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
 
   double previous_norm = std::numeric_limits<double>::infinity();
   bool refactor = true;
-  int stalled = 0;  // consecutive iterations with a fresh Jacobian that did not contract
   for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
     if (refactor) {
       auto outcome = factor();
@@ -81,8 +79,6 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     }
     if (norm <= kConvergedNorm) return true;
     double rate = norm / previous_norm;
-    stalled = refactor && rate >= 1 ? stalled + 1 : 0;
-    if (stalled >= kMaxStalled) break;  // round-off level of an ill-conditioned matrix, or no root
     refactor = rate > kRefactorRate;
     previous_norm = norm;
     failure_unknown_ = worst;
@@ -220,6 +216,14 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   state.x_derivative = (x_one - state.x) / h;
   state.t_heading = t + h;
   state.x_heading = x_one;
+  // The first settling step's -f is q' at t + h: a fast mode the new motion starts shows as
+  // curvature, which bounds the first step after the restart.
+  if (newton_.evaluate(t + h, x_one, p) != EvalStatus::ok) {
+    failure_reason_ = "the model cannot be evaluated after the event";
+    return std::nullopt;
+  }
+  state.q_second_derivative = (-newton_.load().f - state.q_derivative) / h;
+  newton_.keep_dynamic_rows(state.q_second_derivative);
   return state;
 }
 
@@ -236,6 +240,12 @@ std::optional<ConsistentState> Reinitializer::derivative_only(double t, const Ve
     return std::nullopt;
   state.t_heading = t + h;
   state.x_derivative = (state.x_heading - x) / h;
+  if (newton_.evaluate(t + h, state.x_heading, p) != EvalStatus::ok) {
+    failure_reason_ = "the model cannot be evaluated after the event";
+    return std::nullopt;
+  }
+  state.q_second_derivative = (-newton_.load().f - state.q_derivative) / h;
+  newton_.keep_dynamic_rows(state.q_second_derivative);
   return state;
 }
 

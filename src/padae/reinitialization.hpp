@@ -32,6 +32,7 @@ struct ConsistentState {
   Vector x;             // consistent state at t + 0
   Vector q;             // q(x)
   Vector q_derivative;  // right derivative of q at t
+  Vector q_second_derivative;  // of q at t + 0, from the first settling step (dynamic rows)
   Vector x_derivative;  // right derivative of x, from the look-ahead (for prediction only)
   Vector impulse;       // integral of each unknown over the jump (empty without a jump)
   bool charges_moved = false;  // q changed at the jump beyond round-off

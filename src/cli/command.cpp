@@ -224,6 +224,7 @@ class Session {
           case padae::StepKind::failed:
             return fail(integrator_->failure().t, integrator_->failure().reason, integrator_->failure().unknown);
           case padae::StepKind::event: {
+            if (options_.grid) emit_grid(t_before, outcome.t);
             // Two rows at a discontinuity: the state just before and just after it.
             const padae::EventRecord& event = integrator_->last_event();
             if (waveforms_.differ(event.x_before, integrator_->state())) emit(outcome.t, event.x_before);
@@ -232,11 +233,11 @@ class Session {
             break;
           }
           case padae::StepKind::accepted:
+          case padae::StepKind::time_event:
+          case padae::StepKind::stop:
             if (options_.grid) emit_grid(t_before, outcome.t);
             emit(outcome.t, integrator_->state());
             break;
-          case padae::StepKind::time_event:
-          case padae::StepKind::stop: emit(outcome.t, integrator_->state()); break;
         }
         progress_->update(outcome.t);
       }
@@ -277,12 +278,12 @@ class Session {
   void emit(double t, const mna::Vector& x) {
     if (t >= tstart_) waveforms_.row(t, x);
   }
-  // --grid: rows at TSTART + k TSTEP strictly inside the last accepted step, from its
-  // polynomial (after a restart at a corner or an event the polynomial is gone: none there).
+  // --grid: rows at TSTART + k TSTEP strictly inside the last step (also one that ended at an
+  // event or a source corner), from its dense output.
   void emit_grid(double t_before, double t_after) {
     auto point = [&](long k) { return tstart_ + static_cast<double>(k) * settings_.tstep; };
     while (point(next_grid_) <= t_before) ++next_grid_;
-    for (; point(next_grid_) < t_after; ++next_grid_) emit(point(next_grid_), integrator_->interpolate(point(next_grid_)));
+    for (; point(next_grid_) < t_after; ++next_grid_) emit(point(next_grid_), integrator_->dense_output(point(next_grid_)));
   }
 
   const CommandOptions& options_;

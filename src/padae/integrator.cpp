@@ -123,6 +123,7 @@ struct Integrator::Impl {
   double t = 0;
   Vector x;
   Predicates p;
+  Predicates step_predicates;  // p during the current step (an event inside it changes p)
   Vector guards_now;  // guards at (t, x)
   double next_time_event = std::numeric_limits<double>::infinity();
   EventRecord last_event;
@@ -135,6 +136,18 @@ struct Integrator::Impl {
   // BDF history: modified divided differences of x and of q.
   std::array<Vector, kHistory> phi_x, phi_q;
   std::array<double, kHistory> psi{}, alpha{}, beta{}, sigma{}, gamma{};
+  double anchor = 0;  // the time phi_x[0] belongs to
+  // The last step's interpolating polynomial, kept across a restart: output inside a step that
+  // ended at an event or a source corner is still interpolated.
+  struct Polynomial {
+    double anchor = 0;
+    int order = 0;
+    std::array<Vector, kHistory> phi;
+    std::array<double, kHistory> psi{};
+    Predicates p;  // the mode the step was taken in
+  } previous_step;
+  static Vector evaluate_polynomial(double anchor_at, int order_of, const std::array<Vector, kHistory>& phi,
+                                    const std::array<double, kHistory>& psi_of, double t_at);
   int order = 1, order_used = 0, constant_steps = 0;
   bool startup_phase = true;
   int steps_since_restart = 0;
@@ -406,6 +419,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
   if (!(t_stop > t)) return fail(t, "step() called with t_stop " + format_time(t_stop) + " not after t = " + format_time(t));
   const double target = std::min(t_stop, next_time_event);
   const double t_old = t;
+  step_predicates = p;
   const Vector guards_old = guards_now;
 
   update_weights();
@@ -476,6 +490,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     }
     complete_step(error_k, error_k_minus_1, order_new);
     t = t_new;
+    anchor = t_new;
     x = x_new;
     break;
   }
@@ -631,19 +646,28 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
 
 // IDA's IDAGetSolution: the interpolating polynomial of the last step.
 Vector Integrator::Impl::interpolate(double t_at) const {
-  Vector result = phi_x[0];
-  double delta_t = t_at - t;
-  double c = 1, gam = delta_t / psi[0];
-  for (int j = 1; j <= order_used; ++j) {
+  if (order_used == 0 && previous_step.order > 0)
+    return evaluate_polynomial(previous_step.anchor, previous_step.order, previous_step.phi, previous_step.psi, t_at);
+  return evaluate_polynomial(anchor, order_used, phi_x, psi, t_at);
+}
+
+Vector Integrator::Impl::evaluate_polynomial(double anchor_at, int order_of, const std::array<Vector, kHistory>& phi,
+                                             const std::array<double, kHistory>& psi_of, double t_at) {
+  Vector result = phi[0];
+  double delta_t = t_at - anchor_at;
+  double c = 1, gam = delta_t / psi_of[0];
+  for (int j = 1; j <= order_of; ++j) {
     c *= gam;
-    gam = (delta_t + psi[j - 1]) / psi[j];
-    result += c * phi_x[j];
+    gam = (delta_t + psi_of[j - 1]) / psi_of[j];
+    result += c * phi[j];
   }
   return result;
 }
 
 // Order 1 from a consistent state, as after the initial point (IDA's first step).
 void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
+  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, psi, step_predicates};
+  anchor = t_at;
   t = t_at;
   x = consistent.x;
   next_time_event = system.next_time_event(t);
@@ -672,6 +696,7 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   order = 1;
   order_used = 0;
   h_used = 0;
+  have_matrix = false;  // re-initialization factored its own matrices
   psi[0] = h;
   cj = 1 / h;
   constant_steps = 0;
@@ -728,5 +753,14 @@ const Failure& Integrator::failure() const { return impl_->failure; }
 const Statistics& Integrator::statistics() const { return impl_->statistics; }
 
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
+Vector Integrator::dense_output(double t_at) {
+  Impl& s = *impl_;
+  Vector x_at = s.interpolate(t_at);
+  const bool previous = s.order_used == 0 && s.previous_step.order > 0;
+  auto projected = s.reinitializer.project(t_at, x_at, previous ? s.previous_step.p : s.p,
+                                           s.h_used > 0 ? s.h_used : s.h);
+  s.have_matrix = false;  // the projection factored its own matrices
+  return projected ? *projected : x_at;
+}
 
 }  // namespace padae

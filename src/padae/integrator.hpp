@@ -117,6 +117,10 @@ class Integrator {
   double step_size() const;               // size of the last step
   // Dense output: x(t) for t inside the last step, from its interpolating polynomial.
   Vector interpolate(double t) const;
+  // Dense output for writing: the interpolated charges, with the unknowns the error test does
+  // not control (algebraic ones, hidden algebraic directions) made consistent with them. Falls
+  // back to the interpolating polynomial where that fails.
+  Vector dense_output(double t);
 
   const EventRecord& last_event() const;
   const Failure& failure() const;

@@ -227,6 +227,15 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   return state;
 }
 
+std::optional<Vector> Reinitializer::project(double t, const Vector& x_guess, const Predicates& p,
+                                            double h_reference) {
+  if (newton_.evaluate(t, x_guess, p) != EvalStatus::ok) return std::nullopt;
+  const Vector q = newton_.load().q;
+  auto state = settle(t, x_guess, q, p, settle_step(t, h_reference));
+  if (!state) return std::nullopt;
+  return state->x;
+}
+
 std::optional<ConsistentState> Reinitializer::derivative_only(double t, const Vector& x,
                                                               const Predicates& p,
                                                               double h_reference) {

@@ -53,6 +53,12 @@ class Reinitializer {
   std::optional<ConsistentState> derivative_only(double t, const Vector& x, const Predicates& p,
                                                  double h_reference);
 
+  // x(t) with the charges of x_guess and everything else consistent with them: the algebraic
+  // unknowns and the hidden algebraic directions (a floating capacitor's common mode) that no
+  // error test controls are solved for, not taken from an interpolating polynomial.
+  std::optional<Vector> project(double t, const Vector& x_guess, const Predicates& p,
+                                double h_reference);
+
   const std::string& failure_reason() const { return failure_reason_; }
   int failure_unknown() const { return failure_unknown_; }
 

@@ -98,6 +98,36 @@ TEST(Integrator, DenseOutputInterpolatesWithinTheStep) {
   EXPECT_LT(worst, 1e-6);
 }
 
+// x' = 1e-6 y, 0 = y - sin(10 t): the steps follow x, which barely moves; y is not error-tested,
+// so its interpolating polynomial is poor between steps, and dense output solves for it.
+class DrivenAlgebraic : public SemiExplicitSystem {
+ public:
+  DrivenAlgebraic() : SemiExplicitSystem({D, A}) {}
+  EvalStatus equations(double t, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = 1e-6 * z[1];
+    out[1] = z[1] - std::sin(10 * t);
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Integrator, DenseOutputSolvesForTheAlgebraicUnknowns) {
+  DrivenAlgebraic model;
+  Options options;
+  options.rtol = 1e-6;
+  options.atol = 1e-9;
+  Integrator integrator(model, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(2))) << integrator.failure().reason;
+  double worst = 0;
+  ASSERT_TRUE(run_until(integrator, 2.0, [&](const StepOutcome&) {
+    for (double fraction : {0.25, 0.5, 0.75}) {
+      const double t_at = integrator.time() - fraction * integrator.step_size();
+      worst = std::max(worst, std::abs(integrator.dense_output(t_at)[1] - std::sin(10 * t_at)));
+    }
+  }));
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_NEAR(integrator.state()[0], 1e-7 * (1 - std::cos(20.0)), 1e-8);  // ten absolute tolerances
+}
+
 // An index-1 DAE: x' = -y, 0 = y - x^2 (x = 1 / (1 + t)); the algebraic y is not error-tested.
 class IndexOne : public SemiExplicitSystem {
  public:
@@ -157,6 +187,29 @@ TEST(Integrator, TimeEventsAreHitExactly) {
   // x(1) = 1/32 + 0.25*0.75 - 0.75^2 = -0.34375.
   EXPECT_NEAR(integrator.state()[0], 0.03125 + 0.1875 - 0.5625, 1e-7);
   EXPECT_EQ(integrator.statistics().time_events, 1);
+}
+
+TEST(Integrator, DenseOutputCoversTheStepThatEndsAtACorner) {
+  Corner corner;
+  Options options;
+  options.rtol = 1e-8;
+  options.atol = 1e-12;
+  Integrator integrator(corner, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
+  for (;;) {
+    const double t_before = integrator.time();
+    const StepOutcome outcome = integrator.step(1.0);
+    ASSERT_NE(outcome.kind, StepKind::failed) << integrator.failure().reason;
+    if (outcome.kind != StepKind::time_event) continue;
+    // The restart at the corner has begun a new history; the step that ended there still
+    // interpolates x = t^2 / 2.
+    ASSERT_LT(t_before, 0.25);
+    for (double fraction : {0.2, 0.5, 0.8}) {
+      const double t_at = t_before + fraction * (0.25 - t_before);
+      EXPECT_NEAR(integrator.dense_output(t_at)[0], t_at * t_at / 2, 1e-9) << "t = " << t_at;
+    }
+    break;
+  }
 }
 
 // x' = -x, x(0) = 1, with a model that is undefined for x < 0 (like a logarithm of a state

@@ -3,11 +3,14 @@
 #   make test   installs what is missing, builds and runs every test: the suite, the suite
 #               again under ASan + UBSan, and the netlist parser's fuzzer for 60 s
 # Quicker, while developing: make check (the suite only).
+#   make report   the benchmark report: padsim against ngspice and SUNDIALS IDA, error against
+#                 run time -> docs/benchmarks.md, docs/benchmarks/*.png (about 10 min on 2 cores;
+#                 installs libsundials-dev, builds in $(BUILD)-bench; not part of make test)
 BUILD ?= build
 JOBS ?= 2
 DEMO ?= circuits/buck.cir
 
-.PHONY: deps build demo test check test-sanitize fuzz bench clean
+.PHONY: deps build demo test check test-sanitize fuzz bench report clean
 
 deps:
 	@scripts/install-deps.sh
@@ -38,5 +41,12 @@ bench: deps
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DPADSIM_BENCH=ON >/dev/null
 	@cmake --build $(BUILD) -j$(JOBS)
 
-clean:
+report:
+	@scripts/install-deps.sh --bench
+	@cmake -S . -B $(BUILD)-bench -DCMAKE_BUILD_TYPE=Release -DPADSIM_BENCH=ON >/dev/null
+	@cmake --build $(BUILD)-bench -j$(JOBS) --target padsim padae_logical_function_bench
+	@cmake --build $(BUILD)-bench -j$(JOBS) --target padae_ida_compare || \
+	  echo "make report: padae_ida_compare not built (SUNDIALS missing?); the report says so"
+	python3 bench/report/run_report.py --build $(BUILD)-bench
+
 	rm -rf $(BUILD) $(BUILD)-sanitize build-netlist-fuzz out

@@ -97,6 +97,7 @@ struct Integrator::Impl {
   double minimum_step() const;
 
   Vector interpolate(double t_at) const;
+  double first_step_estimate(double t_at, const Vector& x_at);
 
   // --- events ----------------------------------------------------------------------------
   bool evaluate_guards(double t_at, const Vector& x_at, Vector& out) const;
@@ -573,7 +574,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
   std::vector<char> flipped_here(static_cast<std::size_t>(predicate_count), 0);
   std::vector<JumpEntry> jump_entries;
   std::optional<ConsistentState> consistent;
-  const double h_reference = h > 0 ? h : 1e-3 * options.time_scale;
+  const double h_reference = h > 0 ? h : first_step_estimate(t_at, x_start);
 
   for (int iteration = 1;; ++iteration) {
     if (iteration > options.max_event_iterations) {
@@ -642,6 +643,18 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
   if (last_event.jumped) ++statistics.jumps;
   restart(t_at, *consistent);
   return true;
+}
+
+// Before the first step: IDA's estimate, the first-order change over the step within half a
+// tolerance, from q' = -f at the (not yet consistent) initial state.
+double Integrator::Impl::first_step_estimate(double t_at, const Vector& x_at) {
+  if (options.initial_step > 0) return options.initial_step;
+  double h_first = 1e-3 * options.time_scale;
+  if (newton.evaluate(t_at, x_at, p) != EvalStatus::ok) return h_first;
+  Vector q_derivative = -newton.load().f;
+  newton.keep_dynamic_rows(q_derivative);
+  const double rate = weighted_norm(q_derivative, inverse_weight_q, options.norm);
+  return h_first * rate > 0.5 ? 0.5 / rate : h_first;
 }
 
 // IDA's IDAGetSolution: the interpolating polynomial of the last step.
@@ -733,6 +746,7 @@ bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   s.x = x0;
   s.p = p0;
   s.h = 0;
+  s.update_weights();
   // The initial point is made consistent as an event is (jump projection, predicate fixed
   // point); that is the start, not an event, so it is neither counted nor recorded.
   if (!s.settle(t0, x0, p0, true)) return false;

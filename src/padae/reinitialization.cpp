@@ -129,7 +129,7 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   // to the settling step: its charges stay exact either way, since LU is backward stable, and
   // the settling steps fix the algebraic directions.
   const double h_settle = settle_step(t, h_reference);
-  const double h_vanishing = 16 * kEps * std::max(std::abs(t), options_.time_scale);
+  const double h_vanishing = time_resolution(t);
   Vector x_plus;
   double h_impulse = 0;
   // Lengthening is cheap and cures conditioning; continuation in the modes cures a nonlinear
@@ -167,8 +167,16 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   return consistent;
 }
 
+// The shortest time step that still advances t; near t = 0, a millionth of the run's.
+double Reinitializer::time_resolution(double t) const {
+  return 16 * kEps * std::max(std::abs(t), 1e-6 * options_.time_scale);
+}
+
+// The settling steps (up to 4h) stay short of the next source corner: past it the motion is
+// not the one that starts at t.
 double Reinitializer::settle_step(double t, double h_reference) const {
-  return std::max(kSettleFraction * h_reference, 1e6 * kEps * std::max(std::abs(t), options_.time_scale));
+  const double h = std::max(kSettleFraction * h_reference, 1e5 * time_resolution(t));
+  return std::min(h, (system_.next_time_event(t) - t) / 8);
 }
 
 // Backward-Euler steps from the charges after the jump, of lengths h, 2h and 4h, and their
@@ -180,7 +188,7 @@ double Reinitializer::settle_step(double t, double h_reference) const {
 std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_plus,
                                                      const Vector& q_plus, const Predicates& p,
                                                      double h) {
-  const double h_shortest = 1e4 * kEps * std::max(std::abs(t), options_.time_scale);
+  const double h_shortest = 1e3 * time_resolution(t);
   const Vector inverse_weight =
       (options_.rtol * x_plus.cwiseAbs() + absolute_tolerance_).cwiseInverse();
   auto weighted_max = [&](const Vector& v, bool differential_only) {
@@ -191,17 +199,24 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
     return norm;
   };
   Vector x_one, x_two, x_four, extrapolated;
+  // Shorter steps also where Newton fails: the motion over a long step may be far from x_plus.
   for (;; h *= 1e-3) {
     x_one = x_plus;
-    if (!backward_euler_with_continuation(t + h, h, q_plus, p, p, x_one)) return std::nullopt;
+    bool solved = backward_euler_with_continuation(t + h, h, q_plus, p, p, x_one);
     x_two = x_one;
-    if (!backward_euler_with_continuation(t + 2 * h, 2 * h, q_plus, p, p, x_two)) return std::nullopt;
+    solved = solved && backward_euler_with_continuation(t + 2 * h, 2 * h, q_plus, p, p, x_two);
     x_four = x_two;
-    if (!backward_euler_with_continuation(t + 4 * h, 4 * h, q_plus, p, p, x_four)) return std::nullopt;
-    // Lagrange weights of the nodes h, 2h, 4h at 0; the linear extrapolation is 2 x1 - x2.
-    extrapolated = (8 * x_one - 6 * x_two + x_four) / 3;
-    const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
-    if (weighted_max(curvature, false) <= kSettleAccuracy || h * 1e-3 < h_shortest) break;
+    solved = solved && backward_euler_with_continuation(t + 4 * h, 4 * h, q_plus, p, p, x_four);
+    if (solved) {
+      // Lagrange weights of the nodes h, 2h, 4h at 0; the linear extrapolation is 2 x1 - x2.
+      extrapolated = (8 * x_one - 6 * x_two + x_four) / 3;
+      const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
+      if (weighted_max(curvature, false) <= kSettleAccuracy) break;
+    }
+    if (h * 1e-3 < h_shortest) {
+      if (!solved) return std::nullopt;
+      break;
+    }
   }
   ConsistentState state;
   state.x_impulse = x_plus;

@@ -510,11 +510,16 @@ StepOutcome Integrator::Impl::step(double t_stop) {
 
   if (ends_at_target && target == next_time_event) {
     ++statistics.time_events;
-    // The solution is continuous at a source corner, its derivatives are not: restart at
-    // order 1 from the same state.
-    auto consistent = reinitializer.derivative_only(t, x, p, h_used);
-    if (!consistent) return fail(t, reinitializer.failure_reason() + " at t = " + format_time(t), reinitializer.failure_unknown());
-    restart(t, *consistent);
+    // At a source corner the derivatives are discontinuous, and the source itself may jump
+    // (a sawtooth's reset): the event procedure makes the state consistent on the right side
+    // and settles the predicates there; the BDF restarts at order 1.
+    if (!settle(t, x, p, true)) return {StepKind::failed, t};
+    const bool discontinuous = !last_event.flips.empty() || last_event.jumped ||
+                               weighted_max_norm(last_event.x_after - last_event.x_before, inverse_weight_x) > 1;
+    if (discontinuous) {
+      ++statistics.events;
+      return {StepKind::event, t};
+    }
     return {t == t_stop ? StepKind::stop : StepKind::time_event, t};
   }
   if (ends_at_target) return {StepKind::stop, t};
@@ -557,6 +562,7 @@ StepOutcome Integrator::Impl::handle_state_event(double t_old, const Vector& gua
   }
 
   t = t_event;
+  ++statistics.events;
   if (!settle(t_event, x_before, target, true)) return {StepKind::failed, t};
   return {StepKind::event, t};
 }
@@ -565,7 +571,6 @@ StepOutcome Integrator::Impl::handle_state_event(double t_old, const Vector& gua
 // and the predicate fixed point.
 bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicates& target_in,
                               bool record_flips) {
-  ++statistics.events;
   last_event = EventRecord{};
   last_event.t = t_at;
   last_event.x_before = x_start;
@@ -750,7 +755,6 @@ bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   // The initial point is made consistent as an event is (jump projection, predicate fixed
   // point); that is the start, not an event, so it is neither counted nor recorded.
   if (!s.settle(t0, x0, p0, true)) return false;
-  s.statistics.events = 0;
   s.statistics.jumps = 0;
   s.last_event = EventRecord{};
   return true;

@@ -134,12 +134,13 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   double h_impulse = 0;
   // Lengthening is cheap and cures conditioning; continuation in the modes cures a nonlinear
   // start (a junction far from its new operating point): lengths first, then continuation.
+  // Evaluated at the step's end, as backward Euler is: the right side of a source that jumps at t.
   for (bool continuation : {false, true}) {
     for (h_impulse = h_vanishing;; h_impulse = std::min(1e3 * h_impulse, h_settle)) {
       x_plus = x_start;
       bool solved = continuation
-                        ? backward_euler_with_continuation(t, h_impulse, q_before, p_from, p_to, x_plus)
-                        : backward_euler(t, h_impulse, q_before, x_start, p_from, p_to, 1.0, x_plus);
+                        ? backward_euler_with_continuation(t + h_impulse, h_impulse, q_before, p_from, p_to, x_plus)
+                        : backward_euler(t + h_impulse, h_impulse, q_before, x_start, p_from, p_to, 1.0, x_plus);
       if (solved) break;
       if (h_impulse >= h_settle) {
         h_impulse = 0;
@@ -200,23 +201,30 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   };
   Vector x_one, x_two, x_four, extrapolated;
   // Shorter steps also where Newton fails: the motion over a long step may be far from x_plus.
+  // Where the shorter steps fail (round-off of an ill-conditioned matrix), the last
+  // extrapolation stands.
+  bool have_extrapolation = false;
   for (;; h *= 1e-3) {
-    x_one = x_plus;
-    bool solved = backward_euler_with_continuation(t + h, h, q_plus, p, p, x_one);
-    x_two = x_one;
-    solved = solved && backward_euler_with_continuation(t + 2 * h, 2 * h, q_plus, p, p, x_two);
-    x_four = x_two;
-    solved = solved && backward_euler_with_continuation(t + 4 * h, 4 * h, q_plus, p, p, x_four);
-    if (solved) {
-      // Lagrange weights of the nodes h, 2h, 4h at 0; the linear extrapolation is 2 x1 - x2.
-      extrapolated = (8 * x_one - 6 * x_two + x_four) / 3;
-      const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
-      if (weighted_max(curvature, false) <= kSettleAccuracy) break;
-    }
-    if (h * 1e-3 < h_shortest) {
-      if (!solved) return std::nullopt;
+    Vector one = x_plus;
+    bool solved = backward_euler_with_continuation(t + h, h, q_plus, p, p, one);
+    Vector two = one;
+    solved = solved && backward_euler_with_continuation(t + 2 * h, 2 * h, q_plus, p, p, two);
+    Vector four = two;
+    solved = solved && backward_euler_with_continuation(t + 4 * h, 4 * h, q_plus, p, p, four);
+    if (!solved && have_extrapolation) {
+      h *= 1e3;
       break;
     }
+    if (!solved) {
+      if (h * 1e-3 < h_shortest) return std::nullopt;
+      continue;
+    }
+    x_one = std::move(one), x_two = std::move(two), x_four = std::move(four);
+    // Lagrange weights of the nodes h, 2h, 4h at 0; the linear extrapolation is 2 x1 - x2.
+    extrapolated = (8 * x_one - 6 * x_two + x_four) / 3;
+    have_extrapolation = true;
+    const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
+    if (weighted_max(curvature, false) <= kSettleAccuracy || h * 1e-3 < h_shortest) break;
   }
   ConsistentState state;
   state.x_impulse = x_plus;
@@ -249,28 +257,6 @@ std::optional<Vector> Reinitializer::project(double t, const Vector& x_guess, co
   auto state = settle(t, x_guess, q, p, settle_step(t, h_reference));
   if (!state) return std::nullopt;
   return state->x;
-}
-
-std::optional<ConsistentState> Reinitializer::derivative_only(double t, const Vector& x,
-                                                              const Predicates& p,
-                                                              double h_reference) {
-  ConsistentState state;
-  state.x_impulse = x;
-  state.x = x;
-  if (!derivatives_at(t, p, state)) return std::nullopt;
-  const double h = settle_step(t, h_reference);
-  state.x_heading = x;
-  if (!backward_euler_with_continuation(t + h, h, state.q, p, p, state.x_heading))
-    return std::nullopt;
-  state.t_heading = t + h;
-  state.x_derivative = (state.x_heading - x) / h;
-  if (newton_.evaluate(t + h, state.x_heading, p) != EvalStatus::ok) {
-    failure_reason_ = "the model cannot be evaluated after the event";
-    return std::nullopt;
-  }
-  state.q_second_derivative = (-newton_.load().f - state.q_derivative) / h;
-  newton_.keep_dynamic_rows(state.q_second_derivative);
-  return state;
 }
 
 // q and its right derivative -f (dynamic rows) at the consistent state.x.

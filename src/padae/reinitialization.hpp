@@ -49,9 +49,6 @@ class Reinitializer {
   // the explicit jumps X e. h_reference: a step size typical of the solution near t.
   std::optional<ConsistentState> jump(double t, const Vector& x_start, const Predicates& p_from,
                                       const Predicates& p_to, double h_reference);
-  // Only the right derivatives, for a state that is already consistent (a time event).
-  std::optional<ConsistentState> derivative_only(double t, const Vector& x, const Predicates& p,
-                                                 double h_reference);
 
   // x(t) with the charges of x_guess and everything else consistent with them: the algebraic
   // unknowns and the hidden algebraic directions (a floating capacitor's common mode) that no

@@ -603,6 +603,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
         if (!newton.is_auxiliary(entry.row)) last_event.jumped = true;
       }
     }
+    const std::size_t flips_before = last_event.flips.size();
     for (int k = 0; k < predicate_count; ++k) {
       if (target[k] == p[k]) continue;
       flipped_here[k] = 1;
@@ -611,6 +612,23 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     Predicates previous = p;
     p = target;
     consistent = reinitializer.jump(t_at, x_jumped, previous, p, h_reference);
+    if (!consistent && reinitializer.stalled_state() && predicate_count > 0) {
+      // The new mode has no consistent state; the guards where continuation stalled say which
+      // other predicates change with the ones that flipped (the diode that an ideal switch
+      // closing across it turns off).
+      Vector guards_stalled(predicate_count);
+      if (evaluate_guards(t_at, *reinitializer.stalled_state(), guards_stalled)) {
+        Predicates rescue = p;
+        for (int k = 0; k < predicate_count; ++k)
+          if (!flipped_here[k]) rescue[k] = guards_stalled[k] > 0;
+        if (rescue != p) {
+          p = previous;
+          target = rescue;
+          last_event.flips.resize(flips_before);  // recorded again with the rescued mode
+          continue;
+        }
+      }
+    }
     if (!consistent) {
       failure = Failure{t_at, reinitializer.failure_reason() + " at t = " + format_time(t_at),
                         reinitializer.failure_unknown()};

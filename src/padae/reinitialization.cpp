@@ -109,6 +109,7 @@ bool Reinitializer::backward_euler_with_continuation(double t_eval, double h,
     } else if ((increment *= 0.5) < 1e-6) {
       failure_reason_ = "no consistent state in the new mode (continuation stalled at " +
                         std::to_string(lambda) + ")";
+      stalled_state_ = x;
       return false;
     }
   }
@@ -123,6 +124,7 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
     return std::nullopt;
   }
   const Vector q_before = newton_.load().q;
+  stalled_state_.reset();
   // The impulse step is as short as the time resolution allows. Where Newton fails on it
   // (a capacitor without a DC path of its own: C/h swamps every conductance in double
   // precision, the matrix is singular or the iteration stalls at round-off) it is lengthened up

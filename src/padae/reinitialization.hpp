@@ -58,6 +58,10 @@ class Reinitializer {
 
   const std::string& failure_reason() const { return failure_reason_; }
   int failure_unknown() const { return failure_unknown_; }
+  // After a failed jump whose continuation stalled: the state where it stalled, close to the
+  // new mode (a mode without a solution, like an ideal switch closing onto a conducting ideal
+  // diode, shows there which other predicates must change with it).
+  const std::optional<Vector>& stalled_state() const { return stalled_state_; }
 
  private:
   // Backward Euler of length h from charges q_start, for the blend of modes
@@ -80,6 +84,7 @@ class Reinitializer {
   const Vector& absolute_tolerance_;
   std::string failure_reason_;
   int failure_unknown_ = -1;
+  std::optional<Vector> stalled_state_;
 };
 
 }  // namespace padae

@@ -69,6 +69,18 @@ def tighter_options(case):
     return " ".join(words)
 
 
+def padsim_arguments(args, case):
+    """The padsim arguments of a case: the common ones (--padsim-args), with the case's
+    padsim_rtol replacing their --rtol where the case says why, and its padsim_args added."""
+    extra = args.padsim_args.split()
+    if "padsim_rtol" in case:
+        if "--rtol" in extra:
+            extra[extra.index("--rtol") + 1] = str(case["padsim_rtol"])
+        else:
+            extra += ["--rtol", str(case["padsim_rtol"])]
+    return extra + case.get("padsim_args", [])
+
+
 def run_reference(case, workdir, level, ngspice):
     """level: 'default' (the netlist as written), 'tight' (the regression's reference) or
     'tighter' (used only to measure the tight run's own error)."""
@@ -243,7 +255,7 @@ def cmd_compare(args, cases):
             ref = run_reference(case, wd, "tight", args.ngspice)
             default = run_reference(case, wd, "default", args.ngspice)
             test = sc.run_padsim(args.padsim, netlist_of(case), case["probes"], wd,
-                                 extra=args.padsim_args.split() + case.get("padsim_args", []))
+                                 extra=padsim_arguments(args, case))
         except sc.SimulationFailure as e:
             print("%-24s FAILED: %s" % (name, e))
             status = 1
@@ -274,7 +286,7 @@ def cmd_padsim_only(args, cases):
         wd = os.path.join(args.workdir, name)
         try:
             w = sc.run_padsim(args.padsim, netlist_of(case), case["probes"], wd,
-                              extra=args.padsim_args.split() + case.get("padsim_args", []))
+                              extra=padsim_arguments(args, case))
         except sc.SimulationFailure as e:
             print("%-24s FAILED: %s" % (name, e))
             status = 1

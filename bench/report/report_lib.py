@@ -320,16 +320,15 @@ def time_at_error(front, error):
 
 
 def ratios_at_equal_error(front_a, front_b):
-    """time_a / time_b at equal error, on the error range both fronts cover (each interpolated
-    log-log on its own front): at a's front points inside that range and at its two ends.
-    [(error, time_a, time_b, ratio)], empty when the ranges do not overlap."""
+    """time_a / time_b at equal error, at the errors both reach (not below either front's most
+    accurate run): at a's front points in that range, and at its lower end. Each time is
+    interpolated log-log on its own front; above a front's least accurate run its fastest time
+    holds (loosening cannot make a simulator faster than its fastest run).
+    [(error, time_a, time_b, ratio)], empty when one never reaches the other's errors."""
     if not front_a or not front_b:
         return []
     lo = max(front_a[-1][0], front_b[-1][0])
-    hi = min(front_a[0][0], front_b[0][0])
-    if lo > hi:
-        return []
-    levels = sorted(set([lo, hi] + [e for e, _ in front_a if lo <= e <= hi]), reverse=True)
+    levels = sorted(set([lo] + [e for e, _ in front_a if e >= lo]), reverse=True)
     out = []
     for e in levels:
         ta, tb = time_at_error(front_a, e), time_at_error(front_b, e)

@@ -124,9 +124,20 @@ class WorkPrecision(unittest.TestCase):
         a = [(1e-1, 0.01), (1e-3, 0.02), (1e-6, 0.04)]
         b = [(1e-2, 1.0), (1e-4, 4.0)]
         r = rl.ratios_at_equal_error(a, b)
-        self.assertEqual([x[0] for x in r], [1e-2, 1e-3, 1e-4])
+        # a's errors down to b's best (1e-4): at 1e-1 b needs its fastest run.
+        self.assertEqual([x[0] for x in r], [1e-1, 1e-3, 1e-4])
+        self.assertAlmostEqual(r[0][3], 0.01 / 1.0)
         self.assertAlmostEqual(r[1][3], 0.02 / 2.0)
-        self.assertEqual(rl.ratios_at_equal_error(a, [(1e-8, 1.0)]), [])
+        self.assertAlmostEqual(r[2][3], 0.02 * 2 ** (1 / 3) / 4.0)  # a at 1e-4: a third of the way in log
+        # b's only run beats anything a does: at every error of a, b needs that run.
+        r = rl.ratios_at_equal_error(a, [(1e-8, 1.0)])
+        self.assertEqual([x[0] for x in r], [1e-1, 1e-3, 1e-6])
+        for x, expected in zip(r, (0.01, 0.02, 0.04)):
+            self.assertAlmostEqual(x[3], expected)
+        r = rl.ratios_at_equal_error([(1e-8, 1.0)], a)
+        self.assertEqual(len(r), 1)
+        self.assertEqual(r[0][0], 1e-6)
+        self.assertAlmostEqual(r[0][3], 25.0)
 
     def test_loglog_slope_and_median(self):
         self.assertAlmostEqual(rl.loglog_slope([1, 10, 100], [2, 20, 200]), 1.0)

@@ -119,6 +119,17 @@ struct Integrator::Impl {
   Vector absolute_tolerance;
   NewtonMatrix newton;
   Reinitializer reinitializer;
+  // Dense output's own Newton matrix and counters: writing output never changes the
+  // integration (its matrix, its statistics). Made on first use.
+  struct OutputProjection {
+    Statistics statistics;
+    NewtonMatrix newton;
+    Reinitializer reinitializer;
+    OutputProjection(System& system, const Options& options, const Vector& absolute_tolerance)
+        : newton(system, statistics, absolute_tolerance / options.rtol),
+          reinitializer(system, newton, statistics, options, absolute_tolerance) {}
+  };
+  std::unique_ptr<OutputProjection> output_projection;
 
   // The solution.
   double t = 0;
@@ -793,9 +804,10 @@ Vector Integrator::dense_output(double t_at) {
   Impl& s = *impl_;
   Vector x_at = s.interpolate(t_at);
   const bool previous = s.order_used == 0 && s.previous_step.order > 0;
-  auto projected = s.reinitializer.project(t_at, x_at, previous ? s.previous_step.p : s.p,
-                                           s.h_used > 0 ? s.h_used : s.h);
-  s.have_matrix = false;  // the projection factored its own matrices
+  if (!s.output_projection)
+    s.output_projection = std::make_unique<Impl::OutputProjection>(s.system, s.options, s.absolute_tolerance);
+  auto projected = s.output_projection->reinitializer.project(
+      t_at, x_at, previous ? s.previous_step.p : s.p, s.h_used > 0 ? s.h_used : s.h);
   return projected ? *projected : x_at;
 }
 

@@ -1,6 +1,9 @@
 #include "mna/structure.hpp"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <queue>
 
@@ -29,8 +32,8 @@ std::string join_names(const std::vector<std::string>& names) {
   return text;
 }
 
-// The elements on a path from a to b through `edges` (a spanning forest), by breadth-first search.
-std::vector<std::string> path_elements(const std::vector<Edge>& edges, int vertices, int a, int b) {
+// The edges on a path from a to b through `edges` (a spanning forest), by breadth-first search.
+std::vector<Edge> path_edges(const std::vector<Edge>& edges, int vertices, int a, int b) {
   std::vector<std::vector<std::pair<int, int>>> adjacent(vertices);
   for (int k = 0; k < static_cast<int>(edges.size()); ++k) {
     adjacent[edges[k].a].emplace_back(edges[k].b, k);
@@ -45,13 +48,20 @@ std::vector<std::string> path_elements(const std::vector<Edge>& edges, int verti
     for (auto [w, k] : adjacent[v])
       if (via[w] == -2) via[w] = k, frontier.push(w);
   }
-  std::vector<std::string> names;
+  std::vector<Edge> path;
   for (int v = b; v != a && via[v] >= 0;) {
     const Edge& e = edges[via[v]];
-    names.push_back(e.element);
+    path.push_back(e);
     v = e.a == v ? e.b : e.a;
   }
-  return names;
+  return path;
+}
+
+// "loop of voltage sources", "... and inductors", "loop of inductors": what the loop holds.
+std::string loop_kind(const std::vector<Edge>& loop) {
+  const bool inductors = std::any_of(loop.begin(), loop.end(), [](const Edge& e) { return e.connection == Connection::inductive; });
+  const bool sources = std::any_of(loop.begin(), loop.end(), [](const Edge& e) { return e.connection != Connection::inductive; });
+  return !inductors ? "loop of voltage sources" : sources ? "loop of voltage sources and inductors" : "loop of inductors";
 }
 
 void check_edges(const Model& model, StartKind start, std::vector<Edge> edges, const std::string& context) {
@@ -74,10 +84,12 @@ void check_edges(const Model& model, StartKind start, std::vector<Edge> edges, c
     const bool fixes_voltage = e.connection == Connection::voltage_defined || (dc && e.connection == Connection::inductive);
     if (!fixes_voltage) continue;
     if (!loops.join(e.a, e.b)) {
-      std::vector<std::string> loop = path_elements(forest, n + 1, e.a, e.b);
-      loop.push_back(e.element);
-      throw ModelError(context + "loop of voltage sources" + std::string(dc ? " and inductors" : "") + ": " +
-                       join_names(loop) + " (the currents around it are undetermined)");
+      std::vector<Edge> loop = path_edges(forest, n + 1, e.a, e.b);
+      loop.push_back(e);
+      std::vector<std::string> names;
+      for (const Edge& l : loop) names.push_back(l.element);
+      throw ModelError(context + loop_kind(loop) + ": " + join_names(names) + " (the currents around it are undetermined" +
+                       (loop_kind(loop) != "loop of voltage sources" ? " at DC: inductors are shorts there" : "") + ")");
     }
     forest.push_back(e);
   }
@@ -101,7 +113,7 @@ void check_edges(const Model& model, StartKind start, std::vector<Edge> edges, c
       if (crosses && std::find(cut.begin(), cut.end(), e.element) == cut.end()) cut.push_back(e.element);
     }
     std::string message = context + (dc ? "no DC path to ground from node(s) " : "no path to ground from node(s) ") + join_names(nodes);
-    if (!cut.empty()) message += "; only " + join_names(cut) + " connect them to the rest (a cut-set of " +
+    if (!cut.empty()) message += "; only " + join_names(cut) + (cut.size() == 1 ? " connects" : " connect") + " them to the rest (a cut-set of " +
                                  (dc ? "current sources and capacitors" : "current sources") + ")";
     if (dc) message += "; add a resistance to ground, or start from initial conditions (uic)";
     throw ModelError(message);
@@ -114,6 +126,77 @@ void check_structure(const Model& model, StartKind start) { check_edges(model, s
 
 void check_mode_structure(const Model& model, StartKind start, const padae::Predicates& mode) {
   check_edges(model, start, model.edges(mode), "with the initial switch and diode states: ");
+}
+
+namespace {
+
+// The start's Newton matrix, dense: df/dx (operating point) or df/dx + c dq/dx (uic).
+bool dense_matrix(Model& model, double t, const Vector& x, const padae::Predicates& p, double c, Eigen::MatrixXd& out) {
+  padae::Load load;
+  const int n = model.size();
+  const padae::Pattern& pattern = model.pattern();
+  load.f.setZero(n);
+  load.q.setZero(n);
+  load.df_dx.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
+  load.dq_dx.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
+  load.jacobian_requested = true;
+  if (model.load(t, x, p, load) != padae::EvalStatus::ok) return false;
+  out.setZero(n, n);
+  for (int column = 0; column < n; ++column)
+    for (int k = pattern.column_starts()[column]; k < pattern.column_starts()[column + 1]; ++k)
+      out(pattern.row_indices()[k], column) += load.df_dx[k] + c * load.dq_dx[k];
+  // Auxiliary modes (switch states, diode modes) are not solved for: identity rows, as the
+  // integrator's Newton matrix has them.
+  for (int i = 0; i < n; ++i)
+    if (model.kind(i) == padae::UnknownKind::auxiliary) {
+      out.row(i).setZero();
+      out(i, i) = 1;
+    }
+  return out.allFinite();
+}
+
+}  // namespace
+
+std::string singular_linear_equations(Model& model, StartKind start, const padae::Predicates& mode, double t, double time_scale) {
+  const int n = model.size();
+  if (n == 0 || n > kSingularCheckMaxUnknowns) return "";
+  const bool dc = start == StartKind::operating_point;
+  model.hold_initial_voltages(dc);
+  // Two points: where the start began, and away from it; linear equations have one matrix.
+  const Vector x0 = dc ? model.operating_point_guess() : model.initial_conditions();
+  Vector x1 = x0;
+  for (int i = 0; i < n; ++i)
+    if (model.kind(i) != padae::UnknownKind::auxiliary) x1[i] += 0.37 * ((i * 7919) % 13 - 6) + 0.11;
+  const double c = dc ? 0.0 : 1.0 / time_scale;
+  Eigen::MatrixXd a0, a1;
+  const bool evaluated = dense_matrix(model, t, x0, mode, c, a0) && dense_matrix(model, t, x1, mode, c, a1);
+  model.hold_initial_voltages(false);
+  if (!evaluated) return "";
+  const double largest = a0.cwiseAbs().maxCoeff();
+  if (!(largest > 0) || (a1 - a0).cwiseAbs().maxCoeff() > 1e-12 * largest) return "";  // not linear
+  // Equilibrate rows, then columns, so that a large conductance beside a small one is not
+  // mistaken for a rank deficiency.
+  Eigen::MatrixXd scaled = a0;
+  for (int i = 0; i < n; ++i) {
+    const double m = scaled.row(i).cwiseAbs().maxCoeff();
+    if (m > 0) scaled.row(i) /= m;
+  }
+  for (int j = 0; j < n; ++j) {
+    const double m = scaled.col(j).cwiseAbs().maxCoeff();
+    if (m > 0) scaled.col(j) /= m;
+  }
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(scaled);
+  lu.setThreshold(1e-13 * n);
+  if (lu.rank() == n) return "";
+  const Eigen::VectorXd null = lu.kernel().col(0);
+  const double top = null.cwiseAbs().maxCoeff();
+  std::vector<std::string> names;
+  for (int i = 0; i < n; ++i)
+    if (std::abs(null[i]) > 1e-6 * top) names.push_back(model.unknowns().label(i));
+  return std::string("the circuit equations are singular") + (dc ? " at the operating point" : " at the start") +
+         " (linear, rank " + std::to_string(lu.rank()) + " of " + std::to_string(n) + "): they do not determine " +
+         join_names(names) +
+         " (a controlled source fixing its own control, sources that define each other, or values that cancel)";
 }
 
 }  // namespace mna

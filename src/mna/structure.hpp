@@ -26,4 +26,14 @@ void check_structure(const Model& model, StartKind start);
 // they close or a node they isolate is reported before the run.
 void check_mode_structure(const Model& model, StartKind start, const padae::Predicates& mode);
 
+// After a start failed: when the start's equations are linear in the given mode (the Newton
+// matrix, df/dx for the operating point or df/dx + dq/dx / time_scale for uic, is the same at two
+// points) and that matrix is singular (full-pivoting LU after row and column equilibration),
+// the message names the unknowns of a null vector, e.g. "... do not determine v(a), i(e1)".
+// Empty when the matrix is regular, the equations are nonlinear (their failure is not bad
+// input), or the circuit has more than kSingularCheckMaxUnknowns unknowns (dense LU).
+constexpr int kSingularCheckMaxUnknowns = 2000;
+std::string singular_linear_equations(Model& model, StartKind start, const padae::Predicates& mode, double t,
+                                      double time_scale);
+
 }  // namespace mna

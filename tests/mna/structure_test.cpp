@@ -103,6 +103,61 @@ TEST(Structure, OpenIdealSwitchIsolatingACurrentSource) {
   }
 }
 
+TEST(Structure, LoopMessageSaysWhatTheLoopHolds) {
+  CircuitSpec sources;
+  sources.add("v1", {"a", "0"}, 1);
+  sources.add("v2", {"a", "0"}, 2);
+  EXPECT_NE(structure_error(sources, StartKind::operating_point).find("loop of voltage sources: v1, v2 ("), std::string::npos)
+      << structure_error(sources, StartKind::operating_point);
+  CircuitSpec inductors;
+  inductors.add("v1", {"a", "0"}, 1);
+  inductors.add("r1", {"a", "b"}, 1);
+  inductors.add("l1", {"b", "c"}, 1e-3);
+  inductors.add("l2", {"c", "b"}, 1e-3);
+  const std::string error = structure_error(inductors, StartKind::operating_point);
+  EXPECT_NE(error.find("loop of inductors: l1, l2 (the currents around it are undetermined at DC"), std::string::npos) << error;
+}
+
+TEST(Structure, OneElementCutSetSaysConnects) {
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}, 1);
+  c.add("c1", {"in", "mid"}, 1e-6);
+  c.add("r1", {"mid", "x"}, 1);
+  const std::string error = structure_error(c, StartKind::operating_point);
+  EXPECT_NE(error.find("no DC path to ground from node(s) mid, x; only c1 connects them"), std::string::npos) << error;
+}
+
+padae::Predicates no_predicates(const Model& m) { return padae::Predicates(static_cast<std::size_t>(m.predicate_count()), 0); }
+
+TEST(Structure, SingularLinearEquationsNameTheUndeterminedUnknowns) {
+  CircuitSpec c;  // E1 drives its own control with gain 1: v(a) = v(a)
+  c.add("e1", {"a", "0", "a", "0"}, 1.0);
+  c.add("r1", {"a", "0"}, 1.0);
+  Model m(c, {.tstep = 1e-6, .tstop = 1e-3});
+  EXPECT_NO_THROW(check_structure(m, StartKind::operating_point));
+  const std::string error = singular_linear_equations(m, StartKind::operating_point, no_predicates(m), 0, 1e-3);
+  EXPECT_NE(error.find("the circuit equations are singular at the operating point (linear, rank 1 of 2): they do not "
+                       "determine v(a), i(e1)"),
+            std::string::npos)
+      << error;
+  EXPECT_NE(singular_linear_equations(m, StartKind::initial_conditions, no_predicates(m), 0, 1e-3).find("at the start"),
+            std::string::npos);
+}
+
+TEST(Structure, RegularOrNonlinearEquationsAreNotCalledSingular) {
+  CircuitSpec regular;  // gain 2: v(a) = 2 v(a) has the one solution 0
+  regular.add("e1", {"a", "0", "a", "0"}, 2.0);
+  regular.add("r1", {"a", "0"}, 1.0);
+  Model m(regular, {.tstep = 1e-6, .tstop = 1e-3});
+  EXPECT_EQ(singular_linear_equations(m, StartKind::operating_point, no_predicates(m), 0, 1e-3), "");
+  CircuitSpec stiff;  // 1e12 beside 1e-12 siemens: ill-scaled, not singular
+  stiff.add("v1", {"a", "0"}, 1.0);
+  stiff.add("r1", {"a", "b"}, 1e-12);
+  stiff.add("r2", {"b", "0"}, 1e12);
+  Model s(stiff, {.tstep = 1e-6, .tstop = 1e-3});
+  EXPECT_EQ(singular_linear_equations(s, StartKind::operating_point, no_predicates(s), 0, 1e-3), "");
+}
+
 TEST(Structure, ModelErrorsNameTheElement) {
   CircuitSpec c;
   c.add("f1", {"a", "0"}, 1).controls = {"vmissing"};

@@ -4,11 +4,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <regex>
 
 #include "cli/output/waveform_writer.hpp"
 #include "cli/probes.hpp"
@@ -78,8 +81,15 @@ class EventLog {
   }
   void write(const mna::Model& model, const padae::EventRecord& event, double energy) {
     for (const auto& flip : event.flips)
-      file_ << fmt::format("{},{},{},{},{},{}\n", event.t, model.predicate_owner(flip.predicate).name(),
-                           model.predicate_label(flip.predicate), int(flip.from), int(flip.to), energy);
+      file_ << fmt::format("{},{},{},{},{},{}\n", event.t, field(model.predicate_owner(flip.predicate).name()),
+                           field(model.predicate_label(flip.predicate)), int(flip.from), int(flip.to), energy);
+  }
+  // RFC 4180: a label with a comma or a quote ("v(a,b)>0") is quoted, its quotes doubled.
+  static std::string field(const std::string& text) {
+    if (text.find_first_of(",\"\n") == std::string::npos) return text;
+    std::string quoted = "\"";
+    for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return quoted + "\"";
   }
 
  private:
@@ -119,12 +129,62 @@ std::string blame(const mna::Model& model, int unknown) {
   }
 }
 
-void print_statistics(const padae::Statistics& s, int unknowns, double wall) {
+// The integrator's failure messages number predicates ("predicates 0, 3"); name their elements
+// and conditions too: "predicates 0 (b1: v(x)>0), 3 (s1: on)".
+std::string name_predicates(const mna::Model& model, const std::string& reason) {
+  static const std::regex list("(predicates? )([0-9]+(?:, [0-9]+)*)");
+  std::smatch match;
+  if (!std::regex_search(reason, match, list)) return reason;
+  std::string named;
+  const std::string numbers = match[2].str();
+  static const std::regex number("[0-9]+");
+  for (auto it = std::sregex_iterator(numbers.begin(), numbers.end(), number); it != std::sregex_iterator(); ++it) {
+    const int k = std::stoi(it->str());
+    if (!named.empty()) named += ", ";
+    named += it->str();
+    if (k >= 0 && k < model.predicate_count())
+      named += fmt::format(" ({}: {})", model.predicate_owner(k).name(), model.predicate_label(k));
+  }
+  return match.prefix().str() + match[1].str() + named + match.suffix().str();
+}
+
+// SIGTERM, SIGINT, SIGHUP: the run stops after the current step, the rows so far are written,
+// and padsim then dies of the same signal (so that shells and make see why it ended).
+std::atomic<int> stop_signal{0};
+extern "C" void on_stop_signal(int signal) { stop_signal.store(signal); }
+
+class StopSignals {
+ public:
+  StopSignals() {
+    for (int s : signals_) previous_[index(s)] = std::signal(s, on_stop_signal);
+  }
+  ~StopSignals() {
+    for (int s : signals_) std::signal(s, previous_[index(s)]);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+  static int received() { return stop_signal.load(); }
+  // Re-raises the signal with its default action (ends the process).
+  static void die_of(int signal) {
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+  }
+
+ private:
+  static constexpr int signals_[3] = {SIGTERM, SIGINT, SIGHUP};
+  static int index(int s) { return s == SIGTERM ? 0 : s == SIGINT ? 1 : 2; }
+  void (*previous_[3])(int) = {};
+};
+
+void print_statistics(const padae::Statistics& s, int unknowns, double t_end, double wall) {
   fmt::print(stderr,
-             "{{\"steps\": {}, \"rejected\": {}, \"newton_iterations\": {}, \"jacobians\": {}, "
-             "\"lu_factorizations\": {}, \"events\": {}, \"jumps\": {}, \"unknowns\": {}, \"wall_s\": {:.6f}}}\n",
-             s.steps, s.rejected_error_test + s.rejected_newton + s.rejected_domain, s.newton_iterations,
-             s.jacobians, s.lu_factorizations, s.events, s.jumps, unknowns, wall);
+             "{{\"steps\": {}, \"rejected\": {}, \"rejected_error_test\": {}, \"rejected_newton\": {}, "
+             "\"rejected_domain\": {}, \"newton_iterations\": {}, \"jacobians\": {}, "
+             "\"lu_factorizations\": {}, \"events\": {}, \"time_events\": {}, \"jumps\": {}, \"unknowns\": {}, "
+             "\"t_end\": {}, \"wall_s\": {:.6f}}}\n",
+             s.steps, s.rejected_error_test + s.rejected_newton + s.rejected_domain, s.rejected_error_test,
+             s.rejected_newton, s.rejected_domain, s.newton_iterations, s.jacobians, s.lu_factorizations, s.events,
+             s.time_events, s.jumps, unknowns, t_end, wall);
 }
 
 
@@ -212,12 +272,30 @@ class Session {
         print_error(e.what());
         return bad_input;
       }
-      if (!start.ok) return fail(0, "no initial operating point: " + start.message, start.worst_unknown);
-      if (!integrator_->initialize(0, start.x, start.p))
+      // A start that fails on linear, singular equations is bad input (exit 2), named as such.
+      auto singular = [&]() {
+        const std::string why = mna::singular_linear_equations(*model_, start_kind(), start.p, 0, settings_.tstop);
+        if (!why.empty()) print_error(why);
+        return !why.empty();
+      };
+      if (!start.ok) {
+        if (singular()) return bad_input;
+        return fail(0, "no initial operating point: " + start.message, start.worst_unknown);
+      }
+      if (!integrator_->initialize(0, start.x, start.p)) {
+        if (singular()) return bad_input;
         return fail(0, integrator_->failure().reason, integrator_->failure().unknown);
+      }
       emit(0, integrator_->state());
 
       while (integrator_->time() < settings_.tstop) {
+        if (const int signal = StopSignals::received()) {
+          if (progress_) progress_->clear();
+          print_error(fmt::format("interrupted by {} at t = {:.9g} s; the waveform up to there is written",
+                                  signal == SIGTERM ? "SIGTERM" : signal == SIGINT ? "SIGINT" : "SIGHUP",
+                                  integrator_->time()));
+          return simulation_failure;
+        }
         const double t_before = integrator_->time();
         const padae::StepOutcome outcome = integrator_->step(settings_.tstop);
         switch (outcome.kind) {
@@ -260,9 +338,11 @@ class Session {
       }
     }
     if (!temporary_csv_.empty()) std::filesystem::remove(temporary_csv_);
-    if (options_.stats && integrator_) print_statistics(integrator_->statistics(), model_->size(), wall_seconds());
+    if (options_.stats && integrator_)
+      print_statistics(integrator_->statistics(), model_->size(), integrator_->time(), wall_seconds());
     return status;
   }
+
 
  private:
   mna::StartKind start_kind() const {
@@ -272,7 +352,8 @@ class Session {
 
   int fail(double t, const std::string& why, int unknown) {
     if (progress_) progress_->clear();
-    print_error(fmt::format("simulation failed at t = {:.9g} s: {}{}", t, why, blame(*model_, unknown)));
+    print_error(fmt::format("simulation failed at t = {:.9g} s: {}{}", t, name_predicates(*model_, why),
+                            blame(*model_, unknown)));
     return simulation_failure;
   }
   void emit(double t, const mna::Vector& x) {
@@ -308,10 +389,14 @@ class Session {
 }  // namespace
 
 int run_command(const CommandOptions& options) {
+  const StopSignals signals;
   Session session(options);
-  if (const int status = session.load(); status != success) return status;
-  if (const int status = session.open_outputs(); status != success) return status;
-  return session.finish(session.simulate());
+  int status = session.load();
+  if (status == success) status = session.open_outputs();
+  if (status == success) status = session.finish(session.simulate());
+  // A stop signal that came before the time loop (or during its last step) ends padsim too.
+  if (const int signal = StopSignals::received()) StopSignals::die_of(signal);
+  return status;
 }
 
 }  // namespace padsim

@@ -21,7 +21,9 @@ struct CommandOptions {
   bool grid = false;          // also rows on the .tran TSTEP grid, interpolated within steps
 };
 
-// Exit codes of the command.
+// Exit codes of the command. Bad input includes a circuit whose equations are singular (named
+// by the structural checks, or linear and singular at the start). SIGTERM, SIGINT and SIGHUP stop
+// the run after the current step: the rows so far are written, then padsim ends by the signal.
 enum ExitCode { success = 0, simulation_failure = 1, bad_input = 2 };
 
 // Runs the command; messages go to stderr. Returns the exit code.

@@ -1,10 +1,13 @@
 // The padsim command: columns, probes, rows at jumps, event log, statistics, exit codes and
 // the waveform kept on failure. Values are checked against closed forms.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -333,6 +336,82 @@ TEST_F(Cli, ShockleyDiodeMatchesNgspice) {
     }
     EXPECT_GT(compared, 10u);
   }
+}
+
+TEST_F(Cli, StatsSplitTheRejectedSteps) {
+  // ln(v(a)) is only taken above 1 mV, but a step that overshoots the threshold before the event
+  // is located evaluates ln of a negative number: the model says so, the step is cut.
+  const Result r = run(write("ln.cir", "* ln\nV1 a 0 SIN(0 1 1k)\nB1 out 0 V={v(a) > 1m ? ln(v(a)) : ln(1m)}\n"
+                                       "R1 out 0 1\n.tran 10u 3m\n.end\n") +
+                       " -o " + path("ln.csv") + " --stats -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* key : {"\"rejected_error_test\": ", "\"rejected_newton\": ", "\"time_events\": ", "\"t_end\": 0.003"})
+    EXPECT_NE(r.err.find(key), std::string::npos) << key << " in " << r.err;
+  const std::size_t at = r.err.find("\"rejected_domain\": ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  EXPECT_GT(std::atoi(r.err.c_str() + at + 19), 0) << r.err;
+}
+
+TEST_F(Cli, EventLogQuotesLabelsWithCommas) {
+  const std::string events = path("events.csv");
+  const Result r = run(write("lab.cir", "* label\nV1 a 0 SIN(0 1 1k)\nB1 o 0 V={v(a,0) > 0.5 ? 1 : 0}\nR1 o 0 1\n"
+                                        ".tran 10u 1m\n.end\n") +
+                       " -o " + path("o.csv") + " --events " + events + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = read(events);
+  EXPECT_NE(text.find(",b1,\"v(a,0)>0.5\",0,1,0\n"), std::string::npos) << text;
+}
+
+TEST_F(Cli, ChatteringNamesThePredicateElement) {
+  // dx/dt = -sign(x): x reaches 0 at t = 1 s, where the relay would switch infinitely often.
+  const Result r = run(write("relay.cir", "* relay\nC1 x 0 1 IC=1\nG1 x 0 u 0 1\nB1 u 0 V={v(x) > 0 ? 1 : -1}\n"
+                                          "R1 u 0 1\n.tran 10m 3 uic\n.end\n") +
+                       " -o " + path("relay.csv") + " -q");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("simulation failed at t = 1 s: event accumulation"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("0 (b1: v(x)>0)"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, SingularLinearCircuitIsBadInput) {
+  // E1 drives its own control with gain 1: v(a) = v(a) leaves v(a) and i(e1) undetermined.
+  const Result r = run(write("self.cir", "* self\nE1 a 0 a 0 1\nR1 a 0 1\n.tran 1u 1m\n.end\n") + " -o " + path("o.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("the circuit equations are singular at the operating point"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("do not determine v(a), i(e1)"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, SigtermWritesTheRowsAndEndsBySignal) {
+  // A run of hours; SIGTERM once rows are on disk: padsim writes what it has, says when it
+  // stopped, and dies of SIGTERM (a shell sees 128 + 15).
+  const std::string netlist = write("long.cir", "* long\nC1 x 0 1 IC=1\nR1 x 0 1\n.tran 1u 1000 0 1u uic\n.end\n");
+  const std::string csv = path("long.csv"), err = path("err.txt");
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    ::alarm(30);  // a safety net: the run must not outlive the test (SIGALRM ends it)
+    const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, STDERR_FILENO);
+    ::execl(PADSIM_EXECUTABLE, PADSIM_EXECUTABLE, netlist.c_str(), "-o", csv.c_str(), "-q", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  for (int k = 0; k < 400; ++k) {
+    const std::string text = read(csv);
+    if (std::count(text.begin(), text.end(), '\n') >= 3) break;
+    ::usleep(50000);
+  }
+  ::kill(child, SIGTERM);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "exit " << WEXITSTATUS(status);
+  EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  const std::string message = read(err);
+  const std::size_t at = message.find("interrupted by SIGTERM at t = ");
+  ASSERT_NE(at, std::string::npos) << message;
+  const double t_stop = std::strtod(message.c_str() + at + 30, nullptr);
+  const Csv rows = parse_csv(read(csv));
+  ASSERT_GT(rows.rows.size(), 2u);
+  EXPECT_NEAR(rows.rows.back()[0], t_stop, 1e-6 * std::max(1.0, t_stop));
+  for (const auto& row : rows.rows) ASSERT_EQ(row.size(), 2u);
 }
 
 TEST_F(Cli, PlotWritesPng) {

@@ -6,11 +6,13 @@
 #   make report   the benchmark report: padsim against ngspice and SUNDIALS IDA, error against
 #                 run time -> docs/benchmarks.md, docs/benchmarks/*.png (about 10 min on 2 cores;
 #                 installs libsundials-dev, builds in $(BUILD)-bench; not part of make test)
+#   make robustness-report   runs tests/robustness (every case, known failures too) and writes
+#                            docs/robustness.md
 BUILD ?= build
 JOBS ?= 2
 DEMO ?= circuits/buck.cir
 
-.PHONY: deps build demo test check test-sanitize fuzz bench report clean
+.PHONY: deps build demo test check test-sanitize fuzz bench report robustness-report clean
 
 deps:
 	@scripts/install-deps.sh
@@ -41,6 +43,10 @@ bench: deps
 	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DPADSIM_BENCH=ON >/dev/null
 	@cmake --build $(BUILD) -j$(JOBS)
 
+robustness-report: build
+	@python3 tests/robustness/robustness.py report --padsim $(BUILD)/src/cli/padsim --output docs/robustness.md \
+	  --workdir $(BUILD)/robustness-report
+
 report:
 	@scripts/install-deps.sh --bench
 	@cmake -S . -B $(BUILD)-bench -DCMAKE_BUILD_TYPE=Release -DPADSIM_BENCH=ON >/dev/null
@@ -49,4 +55,5 @@ report:
 	  echo "make report: padae_ida_compare not built (SUNDIALS missing?); the report says so"
 	python3 bench/report/run_report.py --build $(BUILD)-bench
 
+clean:
 	rm -rf $(BUILD) $(BUILD)-sanitize build-netlist-fuzz out

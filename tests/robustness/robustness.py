@@ -1133,7 +1133,8 @@ def main():
         names = list(KNOWN_FAILURES) if args.known_failures else all_case_names()
         print("\n".join(names))
         return 0
-    workdir = Path(args.workdir or (Path(os.environ.get("TMPDIR", "/tmp")) / f"padsim-robustness-{os.getpid()}"))
+    # Absolute: the bad-input runs happen in invalid/ (so that diagnostics name the bare file).
+    workdir = Path(args.workdir or (Path(os.environ.get("TMPDIR", "/tmp")) / f"padsim-robustness-{os.getpid()}")).resolve()
     if args.command == "run":
         c = run_case(args.case, Path(args.padsim).resolve(), workdir, args.full)
         for cmd in c.commands:

@@ -218,7 +218,7 @@ void BehavioralExpression::forward(double t, const Vector& x, const std::uint8_t
       case Op::divide: value = a / b, d = {1 / b, -a / (b * b), 0}; break;
       case Op::power:
         value = power(a, b);
-        d[0] = a == 0 && b <= 1 ? (b == 1 ? 1 : 0) : b * value / a;
+        d[0] = a == 0 ? (b == 1 ? 1 : 0) : b * value / a;  // at 0: x^b is flat for b > 1 (b < 1: its infinite slope is left out)
         d[1] = a > 0 ? value * std::log(a) : 0;
         break;
       case Op::greater:

@@ -47,6 +47,7 @@
 
 #include "padae/integrator.hpp"
 #include "padae/semi_explicit.hpp"
+#include "paper_impacts.hpp"
 #include "paper_masses.hpp"
 #include "transistor_amplifier.hpp"
 
@@ -61,84 +62,6 @@ constexpr auto D = UnknownKind::differential;
 constexpr auto A = UnknownKind::algebraic;
 constexpr auto X = UnknownKind::auxiliary;
 
-// --- the paper's (7) and (10), as in tests/padae/paper_examples_test.cpp ----------------------
-struct Escapement {
-  double damping = 0.1, omega = 2 * std::numbers::pi, kick = 0.5;
-};
-
-class EscapementModel : public padae::SemiExplicitSystem {
- public:
-  explicit EscapementModel(Escapement e) : SemiExplicitSystem({D, D, A, X}), e_(e) {}
-  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
-    out[0] = z[1];
-    out[1] = z[2];
-    out[2] = z[2] + 2 * e_.damping * z[1] + e_.omega * e_.omega * z[0];
-    return EvalStatus::ok;
-  }
-  int predicate_count() const override { return 1; }
-  EvalStatus guards(double, const Vector& z, Vector& out) const override {
-    out[0] = z[0];
-    return EvalStatus::ok;
-  }
-  bool has_jumps() const override { return true; }
-  void jump_matrix(double, const Vector&, const Predicates& p, std::vector<padae::JumpEntry>& out) const override {
-    if (p[0]) return;
-    out.push_back({1, 0, e_.kick});
-    out.push_back({3, 0, 1.0});
-  }
-
- private:
-  Escapement e_;
-};
-
-struct Pendulum {
-  double c = 3 * 9.81 / (4 * 0.5);
-  double wall = 0.5;
-  double restitution = 0.5;
-};
-
-class PendulumModel : public padae::SemiExplicitSystem {
- public:
-  explicit PendulumModel(Pendulum p) : SemiExplicitSystem({D, D}), p_(p) {}
-  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
-    out[0] = z[1];
-    out[1] = p_.c * std::sin(z[0]);
-    return EvalStatus::ok;
-  }
-  int predicate_count() const override { return 1; }
-  EvalStatus guards(double, const Vector& z, Vector& out) const override {
-    out[0] = p_.wall - std::sin(z[0]);
-    return EvalStatus::ok;
-  }
-  bool has_jumps() const override { return true; }
-  void jump_matrix(double, const Vector& z, const Predicates& p, std::vector<padae::JumpEntry>& out) const override {
-    if (p[0]) out.push_back({1, 0, (1 + p_.restitution) * z[1]});
-  }
-
- private:
-  Pendulum p_;
-};
-
-template <class F>
-double gauss_legendre(F f, double a, double b, int panels) {
-  static const double nodes[10] = {0.0765265211334973, 0.2277858511416451, 0.3737060887154195,
-                                   0.5108670019508271, 0.6360536807265150, 0.7463319064601508,
-                                   0.8391169718222188, 0.9122344282513259, 0.9639719272779138,
-                                   0.9931285991850949};
-  static const double weights[10] = {0.1527533871307258, 0.1491729864726037, 0.1420961093183820,
-                                     0.1316886384491766, 0.1181945319615184, 0.1019301198172404,
-                                     0.0832767415767048, 0.0626720483341091, 0.0406014298003869,
-                                     0.0176140071391521};
-  double sum = 0, width = (b - a) / panels;
-  for (int i = 0; i < panels; ++i) {
-    double middle = a + (i + 0.5) * width, half = 0.5 * width;
-    for (int j = 0; j < 10; ++j)
-      sum += half * weights[j] * (f(middle - half * nodes[j]) + f(middle + half * nodes[j]));
-  }
-  return sum;
-}
-
-// --- one run's record -------------------------------------------------------------------------
 struct Event {
   double t;
   Vector x_before, x_after;
@@ -536,8 +459,13 @@ double rel(double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 
 
 std::vector<Problem> problems() {
   std::vector<Problem> list;
+  using padae::testing::Escapement;
+  using padae::testing::EscapementModel;
+  using padae::testing::gauss_legendre;
   using padae::testing::Masses;
   using padae::testing::MassesClosedForm;
+  using padae::testing::Pendulum;
+  using padae::testing::PendulumModel;
   {
     static const Masses m;
     static const MassesClosedForm exact(m);

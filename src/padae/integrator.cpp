@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "padae/newton_matrix.hpp"
+#include "padae/norms.hpp"
 #include "padae/reinitialization.hpp"
 #include "padae/root_finder.hpp"
 
@@ -41,20 +42,6 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // are taken as events accumulating toward a finite time.
 constexpr int kAccumulationEvents = 12;
 constexpr double kAccumulationRatio = 0.8;
-
-double weighted_max_norm(const Vector& v, const Vector& inverse_weight, int* worst = nullptr) {
-  double largest = 0;
-  int where = -1;
-  for (Eigen::Index i = 0; i < v.size(); ++i) {
-    double scaled = std::abs(v[i]) * inverse_weight[i];
-    if (scaled > largest || std::isnan(scaled)) {
-      largest = std::isnan(scaled) ? std::numeric_limits<double>::infinity() : scaled;
-      where = static_cast<int>(i);
-    }
-  }
-  if (worst) *worst = where;
-  return largest;
-}
 
 // Over the entries that have a weight (the others are not tested).
 double weighted_norm(const Vector& v, const Vector& inverse_weight, ErrorNorm kind) {

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <limits>
 
+#include "padae/norms.hpp"
+
 namespace padae {
 
 namespace {
@@ -66,12 +68,8 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     // The tolerance never asks for less than round-off in x.
     Vector inverse_weight =
         ((options_.rtol + 100 * kEps) * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
-    double norm = 0;
     int worst = -1;
-    for (Eigen::Index i = 0; i < x.size(); ++i) {
-      double scaled = std::abs(delta[i]) * inverse_weight[i];
-      if (!(scaled <= norm)) norm = scaled, worst = static_cast<int>(i);
-    }
+    const double norm = weighted_max_norm(delta, inverse_weight, &worst);
     if (!std::isfinite(norm)) {
       failure_reason_ = "Newton's method diverges in the new mode";
       failure_unknown_ = worst;
@@ -197,13 +195,9 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   const double h_shortest = 1e3 * time_resolution(t);
   const Vector inverse_weight =
       (options_.rtol * x_plus.cwiseAbs() + absolute_tolerance_).cwiseInverse();
-  auto weighted_max = [&](const Vector& v, bool differential_only) {
-    double norm = 0;
-    for (int i = 0; i < system_.size(); ++i)
-      if (!differential_only || system_.kind(i) == UnknownKind::differential)
-        norm = std::max(norm, std::abs(v[i]) * inverse_weight[i]);
-    return norm;
-  };
+  Vector differential_weight = inverse_weight;
+  for (int i = 0; i < system_.size(); ++i)
+    if (system_.kind(i) != UnknownKind::differential) differential_weight[i] = 0;
   Vector x_one, x_two, x_four, extrapolated;
   // Shorter steps also where Newton fails: the motion over a long step may be far from x_plus.
   // Where the shorter steps fail (round-off of an ill-conditioned matrix), the last
@@ -229,7 +223,7 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
     extrapolated = (8 * x_one - 6 * x_two + x_four) / 3;
     have_extrapolation = true;
     const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
-    if (weighted_max(curvature, false) <= kSettleAccuracy || h * 1e-3 < h_shortest) break;
+    if (weighted_max_norm(curvature, inverse_weight) <= kSettleAccuracy || h * 1e-3 < h_shortest) break;
   }
   ConsistentState state;
   state.x_impulse = x_plus;
@@ -237,7 +231,7 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   // The vanishing step's differential unknowns are exact where it was well conditioned, and
   // the extrapolation agrees with them to Newton's tolerance; where they differ by more than a
   // tenth of the error tolerance the vanishing step lost the hidden algebraic directions.
-  if (weighted_max(x_plus - extrapolated, true) <= 0.1)
+  if (weighted_max_norm(x_plus - extrapolated, differential_weight) <= 0.1)
     for (int i = 0; i < system_.size(); ++i)
       if (system_.kind(i) == UnknownKind::differential) state.x[i] = x_plus[i];
   if (!derivatives_at(t, p, state)) return std::nullopt;

@@ -42,6 +42,26 @@ void apply_tolerances(const netlist::FlatCircuit& flat, const CommandOptions& op
   integrator.atol = tolerances.voltage;
 }
 
+// .options method=gear|trap, as ngspice names them; --method overrides. padsim's default is gear
+// (BDF), not ngspice's trap: switched circuits are stiff, and BDF damps what they excite.
+// Returns false, having printed the error, for an unknown method.
+bool apply_method(const netlist::FlatCircuit& flat, const CommandOptions& options, padae::Options& integrator) {
+  if (options.method) {
+    integrator.method = *options.method;
+    return true;
+  }
+  const netlist::Option* o = flat.find_option("method");
+  if (!o) return true;
+  if (const std::optional<padae::Method> method = parse_method(o->word)) {
+    integrator.method = *method;
+    return true;
+  }
+  fmt::print(stderr, "{}", netlist::format(netlist::Diagnostic{
+                               netlist::Severity::error, o->where,
+                               "unknown integration method '" + o->word + "' (expected gear or trap)"}));
+  return false;
+}
+
 // One CSV column set, written to every requested waveform writer.
 class Waveforms {
  public:
@@ -213,6 +233,7 @@ class Session {
     uic_ = flat->tran && flat->tran->use_initial_conditions;
     mna::Tolerances tolerances;
     apply_tolerances(*flat, options_, integrator_options_, tolerances);
+    if (!apply_method(*flat, options_, integrator_options_)) return bad_input;
     settings_.reltol = integrator_options_.rtol;
     integrator_options_.time_scale = settings_.tstop;
     // TMAX, or (TSTOP - TSTART) / 50 as ngspice's fallback, and within a twentieth of any sine
@@ -387,6 +408,12 @@ class Session {
 };
 
 }  // namespace
+
+std::optional<padae::Method> parse_method(const std::string& name) {
+  if (name == "gear" || name == "bdf") return padae::Method::bdf;
+  if (name == "trap" || name == "trapezoidal") return padae::Method::trapezoidal;
+  return std::nullopt;
+}
 
 int run_command(const CommandOptions& options) {
   const StopSignals signals;

@@ -5,6 +5,8 @@
 #include <optional>
 #include <string>
 
+#include "padae/integrator.hpp"
+
 namespace padsim {
 
 struct CommandOptions {
@@ -12,6 +14,7 @@ struct CommandOptions {
   std::string output = "-";   // CSV; "-" is standard output
   std::string probes;         // "v(out),i(l1)"; empty: .save/.print, else the default columns
   std::optional<double> rtol, atol, tstop;
+  std::optional<padae::Method> method;  // overrides .options method
   bool stats = false;
   std::string events;         // event log CSV
   std::string raw;            // ngspice raw file
@@ -25,6 +28,9 @@ struct CommandOptions {
 // by the structural checks, or linear and singular at the start). SIGTERM, SIGINT and SIGHUP stop
 // the run after the current step: the rows so far are written, then padsim ends by the signal.
 enum ExitCode { success = 0, simulation_failure = 1, bad_input = 2 };
+
+// "gear" (or "bdf"), "trap" (or "trapezoidal"); nullopt for anything else.
+std::optional<padae::Method> parse_method(const std::string& name);
 
 // Runs the command; messages go to stderr. Returns the exit code.
 int run_command(const CommandOptions& options);

@@ -1,4 +1,4 @@
-// padsim NETLIST [-o OUT.csv] [--probe "v(out),i(l1)"] [--rtol R] [--atol A] [--tstop T] [--stats]
+// padsim NETLIST [-o OUT.csv] [--probe "v(out),i(l1)"] [--rtol R] [--atol A] [--tstop T] [--method M] [--stats]
 //                [--events FILE] [--raw OUT.raw] [--ascii] [--plot OUT.png] [--quiet]
 // The only translation unit that includes CLI11 (slow to compile).
 #include <CLI/CLI.hpp>
@@ -35,6 +35,15 @@ int main(int argc, char** argv) {
   add_number(app, "--rtol", options.rtol, "relative tolerance (overrides .options reltol)");
   add_number(app, "--atol", options.atol, "absolute tolerance of every unknown (overrides .options abstol and vntol)");
   add_number(app, "--tstop", options.tstop, "stop time (overrides .tran)");
+  app.add_option_function<std::string>(
+         "--method",
+         [&options](const std::string& text) {
+           options.method = padsim::parse_method(text);
+           if (!options.method) throw CLI::ValidationError("--method", "expected gear or trap, got '" + text + "'");
+         },
+         "integration between events (overrides .options method): gear (BDF orders 1-5, the default) or trap "
+         "(trapezoidal: keeps a lossless oscillation's amplitude; not for stiff circuits)")
+      ->type_name("gear|trap");
   app.add_flag("--stats", options.stats, "print run statistics as one JSON object on stderr");
   app.add_option("--events", options.events, "CSV of every event: time, element, predicate, from, to, jump energy");
   app.add_option("--raw", options.raw, "ngspice raw file (binary)");

@@ -7,6 +7,11 @@
 // error test -> accept (complete step, choose order and h) or reject (restore, shrink) ->
 // look for predicate changes in the step -> handle an event (locate, jump, re-initialize,
 // restart at order 1).
+//
+// The trapezoidal method shares all of it but the corrector of its order-2 steps: the same
+// history predicts (its polynomial through the last three points), the corrector is
+// q'(t+h) = 2/h (q(t+h) - q(t)) - q'(t), and the predictor's miss, which is
+// (1/12 + psi1 psi2 / (6 h^2)) h^3 q''', gives the local error h^3 q''' / 12 (Milne's device).
 #include "padae/integrator.hpp"
 
 #include <algorithm>
@@ -77,7 +82,9 @@ struct Integrator::Impl {
   enum class Newton { modified, modified_fresh, full };
   Correction correct(double t_new, Newton mode);
   bool error_test(double& error_k, double& error_k_minus_1, int& order_new);
+  bool trapezoidal_step() const { return options.method == Method::trapezoidal && order == 2; }
   void complete_step(double error_k, double error_k_minus_1, int order_new);
+  void choose_step(double error_estimate, int error_order, double h_max);
   void restore();
   void rescale_first_step();
   void update_weights();
@@ -151,6 +158,7 @@ struct Integrator::Impl {
   bool startup_phase = true;
   int steps_since_restart = 0;
   double h = 0, h_used = 0, cj = 0, error_coefficient = 0;
+  Vector q_derivative;  // q' at t, as the last corrector (or the restart) gave it: the trapezoidal history
 
   // Newton matrix bookkeeping (modified Newton with reuse).
   bool have_matrix = false;
@@ -175,7 +183,7 @@ Integrator::Impl::Impl(System& system_in, Options options_in)
                                              })),
       newton(system_in, statistics, absolute_tolerance / options_in.rtol),
       reinitializer(system_in, newton, statistics, options, absolute_tolerance) {
-  options.max_order = std::clamp(options.max_order, 1, kMaxOrder);
+  options.max_order = std::clamp(options.max_order, 1, options.method == Method::trapezoidal ? 2 : kMaxOrder);
   for (auto& v : phi_x) v.setZero(n);
   for (auto& v : phi_q) v.setZero(n);
 }
@@ -222,6 +230,10 @@ void Integrator::Impl::set_coefficients() {
   }
   cj = -alpha_s / h;
   error_coefficient = std::max(std::abs(alpha[order] + alpha_s - alpha_0), alpha[order]);
+  if (trapezoidal_step()) {
+    cj = 2 / h;
+    error_coefficient = h * h / (h * h + 2 * psi[1] * psi[2]);
+  }
   for (int i = constant_steps; i <= order; ++i) {
     phi_x[i] *= beta[i];
     phi_q[i] *= beta[i];
@@ -255,6 +267,8 @@ void Integrator::Impl::predict() {
     q_predicted += phi_q[j];
     q_derivative_predicted += gamma[j] * phi_q[j];
   }
+  // The corrector's q' = q'_pred + cj (q - q_pred) is then the trapezoidal one.
+  if (trapezoidal_step()) q_derivative_predicted = cj * (q_predicted - phi_q[0]) - q_derivative;
 }
 
 // Newton on  qdot_pred + cj (q(x) - q_pred) + f(t, x) = 0, from x_pred: modified Newton with
@@ -337,10 +351,14 @@ Integrator::Impl::Correction Integrator::Impl::correct(double t_new, Newton mode
 bool Integrator::Impl::error_test(double& error_k, double& error_k_minus_1, int& order_new) {
   correction_q = q_new - q_predicted;
   double norm_k = weighted_norm(correction_q, inverse_weight_q, options.norm);
-  error_k = sigma[order] * norm_k;
-  double terr_k = (order + 1) * error_k;
   order_new = order;
   error_k_minus_1 = 0;
+  if (trapezoidal_step()) {
+    error_k = error_coefficient * norm_k;
+    return error_k <= 1.0;
+  }
+  error_k = sigma[order] * norm_k;
+  double terr_k = (order + 1) * error_k;
   if (order > 1) {
     Vector lower = phi_q[order] + correction_q;
     error_k_minus_1 = sigma[order - 1] * weighted_norm(lower, inverse_weight_q, options.norm);
@@ -354,6 +372,13 @@ bool Integrator::Impl::error_test(double& error_k, double& error_k_minus_1, int&
     }
   }
   return error_coefficient * norm_k <= 1.0;
+}
+
+// IDA's step ratio for the next step from the local error estimate of order error_order.
+void Integrator::Impl::choose_step(double error_estimate, int error_order, double h_max) {
+  double ratio = std::pow(2 * error_estimate + 1e-4, -1.0 / (error_order + 1));
+  if (ratio >= 2) h = std::min(2 * h, h_max);
+  else if (ratio <= 1) h *= std::clamp(ratio, 0.5, 0.9);
 }
 
 // IDA's IDACompleteStep: order and step for the next step, then the divided differences.
@@ -372,6 +397,10 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
       order = std::min(order + 1, options.max_order);
       h = std::min(2 * h, h_max);
     }
+  } else if (options.method == Method::trapezoidal) {
+    // Back to the trapezoidal order after any backward-Euler step (repeated failures).
+    order = options.max_order;
+    choose_step(error_k, order_used, h_max);
   } else {
     enum { lower, maintain, raise } action = maintain;
     double error_new = error_k;
@@ -396,11 +425,10 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
     }
     if (action == raise) ++order, error_new = error_k_plus_1;
     if (action == lower) --order, error_new = error_k_minus_1;
-    double ratio = std::pow(2 * error_new + 1e-4, -1.0 / (order + 1));
-    if (ratio >= 2) h = std::min(2 * h, h_max);
-    else if (ratio <= 1) h *= std::clamp(ratio, 0.5, 0.9);
+    choose_step(error_new, order, h_max);
   }
 
+  if (options.method == Method::trapezoidal) q_derivative = q_derivative_predicted + cj * correction_q;
   correction_x = x_new - x_predicted;
   if (order_used < options.max_order) {
     phi_x[order_used + 1] = correction_x;
@@ -440,7 +468,11 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     predict();
     const double t_new = ends_at_target ? target : t + h;
 
-    bool fresh = !have_matrix || std::abs(cj / cj_of_matrix - 1) > kJacobianCjChange ||
+    // The trapezoidal rule damps nothing, not even the bias a matrix of another cj leaves in
+    // Newton's solution: it would accumulate into amplitude drift (an LC tank lost 4% over
+    // 10,000 periods), so its matrix always has the step's cj.
+    const double cj_change_allowed = trapezoidal_step() ? 0.0 : kJacobianCjChange;
+    bool fresh = !have_matrix || std::abs(cj / cj_of_matrix - 1) > cj_change_allowed ||
                  statistics.steps >= step_of_matrix + kStepsBetweenJacobians;
     Correction correction = correct(t_new, fresh ? Newton::modified_fresh : Newton::modified);
     if (correction == Correction::diverged && !fresh) correction = correct(t_new, Newton::modified_fresh);
@@ -672,9 +704,9 @@ double Integrator::Impl::first_step_estimate(double t_at, const Vector& x_at) {
   if (options.initial_step > 0) return options.initial_step;
   double h_first = 1e-3 * options.time_scale;
   if (newton.evaluate(t_at, x_at, p) != EvalStatus::ok) return h_first;
-  Vector q_derivative = -newton.load().f;
-  newton.keep_dynamic_rows(q_derivative);
-  const double rate = weighted_norm(q_derivative, inverse_weight_q, options.norm);
+  Vector q_rate = -newton.load().f;
+  newton.keep_dynamic_rows(q_rate);
+  const double rate = weighted_norm(q_rate, inverse_weight_q, options.norm);
   return h_first * rate > 0.5 ? 0.5 / rate : h_first;
 }
 
@@ -727,6 +759,7 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   phi_q[0] = consistent.q;
   phi_x[1] = h * consistent.x_derivative;
   phi_q[1] = h * consistent.q_derivative;
+  q_derivative = consistent.q_derivative;
   order = 1;
   order_used = 0;
   h_used = 0;

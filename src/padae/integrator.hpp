@@ -1,6 +1,7 @@
 // The predicate-DAE integrator: variable-order, variable-step BDF (orders 1-5, fixed-leading-
 // coefficient form as in DASSL/IDA) applied to the charge-oriented form of system.hpp, with
-// exact event location, jumps and consistent re-initialization.
+// exact event location, jumps and consistent re-initialization. The trapezoidal rule is the
+// alternative for lossless oscillators, which BDF damps.
 //
 // Use, one step at a time (the caller writes output and decides what to do next):
 //
@@ -27,11 +28,23 @@ namespace padae {
 // circuits). Newton's convergence test always takes the largest.
 enum class ErrorNorm { rms, max };
 
+// The integration formula between events.
+//   bdf:          variable order 1-5 (Gear). L-stable at low order: a stiff mode decays at once,
+//                 but an undamped oscillation loses amplitude (a lossless LC tank, about 3e-5 per
+//                 period at rtol 1e-3).
+//   trapezoidal:  order 2, A-stable and without damping: an undamped oscillation keeps its
+//                 amplitude for any step (phase error only). A stiff mode is not damped either
+//                 (it alternates in sign), so this is for oscillators, not for stiff circuits.
+//                 Each (re)start takes backward-Euler steps first, as the error estimate needs
+//                 three points.
+enum class Method { bdf, trapezoidal };
+
 struct Options {
   double rtol = 1e-4;
   double atol = 1e-6;              // default absolute tolerance, see System::absolute_tolerance
   ErrorNorm norm = ErrorNorm::rms;
-  int max_order = 5;
+  Method method = Method::bdf;
+  int max_order = 5;               // for bdf (trapezoidal is order 2)
   double initial_step = 0.0;       // 0: chosen from the tolerances
   double max_step = 0.0;           // 0: unlimited
   double min_step = 0.0;           // 0: from the time scale and round-off

@@ -235,6 +235,32 @@ TEST_F(Cli, GridAddsInterpolatedRowsOnTheTstepGrid) {
   EXPECT_GT(csv.rows.size(), steps.rows.size());
 }
 
+// A lossless 1 Hz LC tank, 1,000 periods: with .options method=trap the amplitude
+// sqrt(v^2 + (L/C) i^2) stays 1; --method gear (BDF) overrides it and damps.
+TEST_F(Cli, TrapezoidalMethodKeepsAnLcTanksAmplitude) {
+  const std::string netlist = write("tank.cir",
+                                    "* LC tank\nC1 t 0 {1/(4*pi*pi)} IC=1\nL1 t 0 1 IC=0\n"
+                                    ".options method=trap\n.tran 1 1000 999 uic\n.end\n");
+  auto worst_drift = [](const Result& r) {
+    const Csv csv = parse_csv(r.out);
+    const double l_over_c = 4 * std::acos(-1.0) * std::acos(-1.0);
+    double worst = 0;
+    for (const auto& row : csv.rows)
+      worst = std::max(worst, std::abs(std::hypot(row[csv.column("v(t)")], std::sqrt(l_over_c) * row[csv.column("i(l1)")]) - 1));
+    return worst;
+  };
+  const Result trap = run(netlist);
+  ASSERT_EQ(trap.exit_code, 0) << trap.err;
+  EXPECT_LT(worst_drift(trap), 1e-5);
+  const Result gear = run(netlist + " --method gear");
+  ASSERT_EQ(gear.exit_code, 0) << gear.err;
+  EXPECT_GT(worst_drift(gear), 1e-3);
+  const Result bad = run(write("euler.cir", "* bad method\nR1 a 0 1\nV1 a 0 1\n.options method=euler\n.tran 1 2\n.end\n"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("euler.cir:4:"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("unknown integration method 'euler'"), std::string::npos) << bad.err;
+}
+
 TEST_F(Cli, TstopOverridesTheNetlist) {
   const Result r = run(write("rc.cir", rc_netlist) + " --tstop 1m");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -2,6 +2,9 @@
 // jump that flips a further predicate, and chattering that must be diagnosed, not looped on.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <numbers>
+
 #include "padae/integrator.hpp"
 #include "padae/semi_explicit.hpp"
 #include "run_until.hpp"
@@ -188,6 +191,52 @@ TEST(Events, ACircuitPaysOnlyForWhatItUses) {
   EXPECT_EQ(model.guard_calls, 0);
   EXPECT_EQ(model.jump_calls, 0);
   EXPECT_EQ(integrator.statistics().events, 0);
+}
+
+// x'' = -x for x > 0 and x'' = -4 x for x < 0: half periods of pi and pi/2, and |x'| = 1 at
+// every crossing of x = 0 (the potential is zero there on both sides). Started at x = sin 0.5,
+// x' = cos 0.5, the n-th crossing is at pi - 0.5 + (n - 1) 3 pi / 4 ... alternately: downward
+// crossings at pi - 0.5 + k 3pi/2, upward ones pi/2 later.
+class StiffeningOscillator : public SemiExplicitSystem {
+ public:
+  StiffeningOscillator() : SemiExplicitSystem({D, D}) {}
+  EvalStatus equations(double, const Vector& z, const Predicates& p, Vector& out) override {
+    out[0] = z[1];
+    out[1] = -(p[0] ? 1.0 : 4.0) * z[0];
+    return EvalStatus::ok;
+  }
+  int predicate_count() const override { return 1; }
+  EvalStatus guards(double, const Vector& z, Vector& out) const override {
+    out[0] = z[0];
+    return EvalStatus::ok;
+  }
+};
+
+// The trapezoidal method restarts after each event like BDF does, with two backward-Euler steps,
+// each within the tolerance. Over 100 cycles the crossing times drift by no more than the local
+// errors add up to (steps x rtol; the phase error of the trapezoidal rule) and |x'| at the
+// crossings by no more than those restarts lose (2 x rtol each).
+TEST(Events, TrapezoidalLocatesEventsAndKeepsTheAmplitudeAcrossThem) {
+  StiffeningOscillator model;
+  Options options;
+  options.method = Method::trapezoidal;
+  options.rtol = 1e-7;
+  options.atol = 1e-10;
+  Integrator integrator(model, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector{{std::sin(0.5), std::cos(0.5)}})) << integrator.failure().reason;
+  const double pi = std::numbers::pi;
+  int crossings = 0;
+  double worst_time = 0, worst_speed = 0;
+  ASSERT_TRUE(run_until(integrator, 100 * 1.5 * pi, [&](const StepOutcome& outcome) {
+    if (outcome.kind != StepKind::event) return;
+    const double exact = pi - 0.5 + (crossings / 2) * 1.5 * pi + (crossings % 2) * 0.5 * pi;
+    worst_time = std::max(worst_time, std::abs(outcome.t - exact));
+    worst_speed = std::max(worst_speed, std::abs(std::abs(integrator.state()[1]) - 1));
+    ++crossings;
+  })) << integrator.failure().reason;
+  EXPECT_EQ(crossings, 200);
+  EXPECT_LT(worst_time, static_cast<double>(integrator.statistics().steps) * options.rtol);
+  EXPECT_LT(worst_speed, 2 * crossings * options.rtol);
 }
 
 }  // namespace

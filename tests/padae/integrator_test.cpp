@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "padae/newton_matrix.hpp"
 #include "padae/semi_explicit.hpp"
@@ -81,6 +82,48 @@ TEST(Integrator, OscillatorOverTenPeriodsReachesHighOrder) {
   EXPECT_NEAR(integrator.state()[1], 0.0, 1e-5);
   EXPECT_GE(highest_order, 4);
   EXPECT_LT(integrator.statistics().steps, 3000);
+}
+
+// The trapezoidal rule is A-stable without damping: x'' = -x keeps its amplitude over 1,000
+// periods at a loose tolerance, where BDF (its L-stable low orders) visibly damps it.
+TEST(Integrator, TrapezoidalKeepsAnUndampedOscillationsAmplitude) {
+  auto amplitude_after = [](Method method) {
+    Oscillator oscillator;
+    Options options;
+    options.method = method;
+    options.rtol = 1e-3;
+    options.atol = 1e-6;
+    Integrator integrator(oscillator, options);
+    EXPECT_TRUE(integrator.initialize(0.0, Vector::Unit(2, 0))) << integrator.failure().reason;
+    EXPECT_TRUE(run_until(integrator, 2000 * std::numbers::pi)) << integrator.failure().reason;
+    return integrator.state().norm();
+  };
+  EXPECT_NEAR(amplitude_after(Method::trapezoidal), 1.0, 1e-6);
+  EXPECT_LT(amplitude_after(Method::bdf), 1.0 - 1e-3);
+}
+
+// Second order: tightening the tolerance 1000-fold shrinks the global error about 1000^(2/3)
+// = 100-fold (local error h^3 held to the tolerance, global error h^2). The local errors of a
+// decay add up without decaying relative to x (each step's factor (1 + z/2) / (1 - z/2) misses
+// e^z by z^3 / 12), so the relative global error is bounded by steps x rtol, not by rtol.
+TEST(Integrator, TrapezoidalIsSecondOrderAndMeetsItsTolerance) {
+  std::vector<double> errors;
+  for (double rtol : {1e-4, 1e-7, 1e-10}) {
+    Decay decay(3.0);
+    Options options;
+    options.method = Method::trapezoidal;
+    options.rtol = rtol;
+    options.atol = rtol * 1e-3;
+    Integrator integrator(decay, options);
+    ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+    ASSERT_TRUE(run_until(integrator, 2.0, [&](const StepOutcome&) { EXPECT_LE(integrator.order(), 2); }));
+    errors.push_back(std::abs(integrator.state()[0] - std::exp(-6.0)) / std::exp(-6.0));
+    EXPECT_LT(errors.back(), static_cast<double>(integrator.statistics().steps) * rtol) << "rtol " << rtol;
+  }
+  for (std::size_t k = 1; k < errors.size(); ++k) {
+    EXPECT_GT(errors[k - 1] / errors[k], 30) << k;
+    EXPECT_LT(errors[k - 1] / errors[k], 300) << k;
+  }
 }
 
 TEST(Integrator, DenseOutputInterpolatesWithinTheStep) {

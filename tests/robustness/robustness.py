@@ -35,10 +35,6 @@ BAD_DIR = HERE / "invalid"  # the netlist corpus test skips directories named in
 
 # Cases padsim fails today, with the reason (shown in CTest as disabled and in the report).
 KNOWN_FAILURES = {
-    "lc_tank_10000_periods":
-        "integrator (BDF damping): after 10,000 periods at the default tolerances the amplitude is 0.729 (drift "
-        "0.27 against 1e-3; 3.2e-5 lost per period). padsim has no order control, trapezoidal or TR-BDF2 option "
-        "that keeps an undamped oscillation; tightening rtol only shrinks the damping (see the figures).",
     "diode_turnoff_at_peak":
         "integrator (an ideal diode's turn-on): in the second and third cycles D1 turns on, off 4e-16 s later and "
         "on again 0.57 us later (t = 23.6945 ms, 23.6951 ms): 8 flips in 3 cycles where a half-wave rectifier "
@@ -402,28 +398,30 @@ def lc_measure(r):
 
 
 def case_lc_tank_10000_periods(c):
-    r = c.run(tag="default")
+    # The netlist asks for the trapezoidal rule (.options method=trap), which has no damping; BDF
+    # (--method gear, padsim's default) is measured beside it.
+    r = c.run(tag="trap")
     if not c.expect(r.returncode == 0, f"the run succeeds ({describe_status(r.returncode)})"):
         c.figure(r.error_text())
         return
     amplitude, phase = lc_measure(r)
     drift = max(abs(a - 1) for a in amplitude)
-    c.expect(drift <= 1e-3, f"amplitude in the last period {g(min(amplitude))} .. {g(max(amplitude))}: "
-                            f"drift {g(drift)} <= 1e-3", key=True)
-    c.figure(f"default: amplitude after 10,000 periods {g(amplitude[-1])}, damping per period "
-             f"{g(-math.expm1(math.log(amplitude[-1]) / 10000))}, phase error {g(phase)} periods")
-    c.stats_figure(r, "default: ")
-    if c.full:
-        for rtol in ("1e-6", "1e-9"):
-            r = c.run(args=["--rtol", rtol], tag=f"rtol{rtol}")
-            if r.returncode != 0:
-                c.figure(f"rtol {rtol}: {describe_status(r.returncode)} {r.error_text()}")
-                continue
-            amplitude, phase = lc_measure(r)
-            c.figure(f"rtol {rtol} (informative): amplitude after 10,000 periods {g(amplitude[-1])}, drift "
-                     f"{g(max(abs(a - 1) for a in amplitude))}, damping per period "
-                     f"{g(-math.expm1(math.log(amplitude[-1]) / 10000))}, phase error {g(phase)} periods")
-            c.stats_figure(r, f"rtol {rtol}: ")
+    c.expect(drift <= 1e-3, f"method=trap, default tolerances: amplitude in the last period {g(min(amplitude))} .. "
+                            f"{g(max(amplitude))}: drift {g(drift)} <= 1e-3", key=True)
+    c.figure(f"trap: phase error after 10,000 periods {g(phase)} periods")
+    c.stats_figure(r, "trap: ")
+    for rtol in ((None, "1e-6", "1e-9") if c.full else (None,)):
+        args = ["--method", "gear"] + (["--rtol", rtol] if rtol else [])
+        label = "gear" + (f" rtol {rtol}" if rtol else ", default tolerances")
+        r = c.run(args=args, tag="gear" + (rtol or ""))
+        if r.returncode != 0:
+            c.figure(f"{label}: {describe_status(r.returncode)} {r.error_text()}")
+            continue
+        amplitude, phase = lc_measure(r)
+        c.figure(f"{label} (informative): amplitude after 10,000 periods {g(amplitude[-1])}, drift "
+                 f"{g(max(abs(a - 1) for a in amplitude))}, damping per period "
+                 f"{g(-math.expm1(math.log(amplitude[-1]) / 10000))}, phase error {g(phase)} periods")
+        c.stats_figure(r, f"{label}: ")
 
 
 # --- events ---------------------------------------------------------------------------------------

@@ -110,7 +110,8 @@ bool is_element(const ast::Card& card) {
                std::is_same_v<Node, ast::VoltageControlled> ||
                std::is_same_v<Node, ast::CurrentControlled> ||
                std::is_same_v<Node, ast::Behavioral> || std::is_same_v<Node, ast::Diode> ||
-               std::is_same_v<Node, ast::VoltageSwitch> || std::is_same_v<Node, ast::CurrentSwitch>;
+               std::is_same_v<Node, ast::VoltageSwitch> ||
+               std::is_same_v<Node, ast::CurrentSwitch>;
       },
       card.node);
 }
@@ -246,7 +247,8 @@ class Hierarchy {
   // What the names in a subcircuit's body resolve to: its own subcircuits, then `enclosing`.
   // Bodies defining none share `enclosing`, so that counts are shared as widely as possible.
   const Definitions& scope(const ast::Subcircuit& subcircuit,
-                           const std::vector<const ast::Card*>& cards, const Definitions& enclosing) {
+                           const std::vector<const ast::Card*>& cards,
+                           const Definitions& enclosing) {
     if (std::none_of(cards.begin(), cards.end(), [](const ast::Card* card) {
           return std::holds_alternative<ast::Subcircuit>(card->node);
         }))

@@ -1,6 +1,7 @@
-// Elaboration: AST -> FlatCircuit. Parameters are evaluated in dependency order, subcircuits
-// expanded with hierarchical names, references (models, controlling sources, inductors)
-// checked.
+// Elaboration: AST -> FlatCircuit. The subcircuit hierarchy is checked first (recursion, depth,
+// the number of elements it expands to) without building anything; then parameters are
+// evaluated in dependency order, subcircuits expanded with hierarchical names, references
+// (models, controlling sources, inductors) checked.
 //
 // Which ignored cards are errors: an analysis padsim does not run (.ac .dc .op .noise ...) is
 // only a warning when the netlist has a .tran (the transient result is what was asked for);
@@ -10,7 +11,9 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <set>
 #include <unordered_map>
@@ -22,9 +25,7 @@ namespace netlist {
 
 namespace {
 
-constexpr int max_subcircuit_depth = 100;
-// Subcircuits instantiating subcircuits multiply: a few lines can ask for 10^10 elements.
-constexpr std::size_t max_flat_elements = 10'000'000;
+constexpr std::size_t max_subcircuit_depth = 100;
 
 bool is_one_of(const std::string& name, std::initializer_list<const char*> names) {
   for (const char* candidate : names)
@@ -84,6 +85,37 @@ double apply_binary(BinaryOperator op, double l, double r) {
   return std::nan("");
 }
 
+std::size_t saturating_add(std::size_t a, std::size_t b) {
+  return a > std::numeric_limits<std::size_t>::max() - b ? std::numeric_limits<std::size_t>::max()
+                                                         : a + b;
+}
+
+// The cards of a body with the cards of its includes in their place.
+void flatten_includes(const std::vector<ast::Card>& cards, std::vector<const ast::Card*>& out) {
+  for (const ast::Card& card : cards) {
+    if (auto* include = std::get_if<ast::Include>(&card.node))
+      flatten_includes(include->cards, out);
+    else
+      out.push_back(&card);
+  }
+}
+
+// Cards that become one flat element each (an X card becomes its subcircuit's elements).
+bool is_element(const ast::Card& card) {
+  return std::visit(
+      [](const auto& node) {
+        using Node = std::decay_t<decltype(node)>;
+        return std::is_same_v<Node, ast::TwoTerminal> || std::is_same_v<Node, ast::Coupling> ||
+               std::is_same_v<Node, ast::IndependentSource> ||
+               std::is_same_v<Node, ast::VoltageControlled> ||
+               std::is_same_v<Node, ast::CurrentControlled> ||
+               std::is_same_v<Node, ast::Behavioral> || std::is_same_v<Node, ast::Diode> ||
+               std::is_same_v<Node, ast::VoltageSwitch> ||
+               std::is_same_v<Node, ast::CurrentSwitch>;
+      },
+      card.node);
+}
+
 // Parameter values of one subcircuit instance (or the top level), falling back to the
 // enclosing instance's.
 struct Scope {
@@ -120,13 +152,128 @@ struct Definitions {
   }
 };
 
+// Registers the subcircuits defined in a body (its cards); a second one of a name is an error.
+void define_subcircuits(const std::vector<const ast::Card*>& cards, Definitions& definitions,
+                        Diagnostics& diagnostics) {
+  for (const ast::Card* card : cards)
+    if (auto* subcircuit = std::get_if<ast::Subcircuit>(&card->node))
+      if (!definitions.subcircuits.emplace(subcircuit->name.text, subcircuit).second)
+        diagnostics.error(subcircuit->name.where,
+                          "subcircuit '" + subcircuit->name.text + "' is defined twice");
+}
+
+// The subcircuit hierarchy, checked before elaboration builds anything: an instance of a
+// subcircuit being expanded (recursion), nesting deeper than max_subcircuit_depth, and more
+// elements than the limit. Subcircuits instantiating subcircuits multiply (ten levels of ten
+// instances are 10^10 elements), so the elements are counted once per subcircuit definition
+// (its own plus, per X card, its subcircuit's; saturating) and per scope its names resolve in:
+// a subcircuit defined inside a body is seen by the bodies that body's instances expand.
+class Hierarchy {
+ public:
+  Hierarchy(Diagnostics& diagnostics, std::size_t max_elements)
+      : diagnostics_(diagnostics), max_elements_(max_elements) {}
+
+  // True if the top-level cards may be elaborated; otherwise an error was reported.
+  bool check(const std::vector<const ast::Card*>& cards) {
+    Definitions top;
+    define_subcircuits(cards, top, diagnostics_);
+    std::vector<std::string> chain;
+    const ast::Card* over_limit = nullptr;
+    if (!walk(cards, top, chain, &over_limit)) return false;
+    if (!over_limit) return true;
+    diagnostics_.error(over_limit->where, "the circuit expands to more than " +
+                                              std::to_string(max_elements_) + " elements");
+    return false;
+  }
+
+ private:
+  struct Expansion {
+    std::size_t elements = 0;  // saturating
+    std::size_t depth = 0;     // levels of subcircuit bodies below this one
+  };
+
+  // The expansion of a body; nullopt if recursion or too deep nesting was reported. `chain` are
+  // the subcircuits being expanded, outermost first. `over_limit` (the top level) gets the first
+  // card at which the running count exceeds the limit.
+  std::optional<Expansion> walk(const std::vector<const ast::Card*>& cards,
+                                const Definitions& definitions, std::vector<std::string>& chain,
+                                const ast::Card** over_limit = nullptr) {
+    Expansion total;
+    for (const ast::Card* card : cards) {
+      std::size_t elements = is_element(*card) ? 1 : 0;
+      if (auto* instance = std::get_if<ast::Instance>(&card->node)) {
+        const ast::Subcircuit* subcircuit = definitions.find_subcircuit(instance->subcircuit.text);
+        if (!subcircuit) continue;  // elaboration reports it
+        auto inner = expand(*instance, *subcircuit, definitions, chain);
+        if (!inner) return std::nullopt;
+        elements = inner->elements;
+        total.depth = std::max(total.depth, inner->depth + 1);
+      }
+      total.elements = saturating_add(total.elements, elements);
+      if (over_limit && !*over_limit && total.elements > max_elements_) *over_limit = card;
+    }
+    return total;
+  }
+
+  // The expansion of one X card's subcircuit, whose instance sees `enclosing`.
+  std::optional<Expansion> expand(const ast::Instance& card, const ast::Subcircuit& subcircuit,
+                                  const Definitions& enclosing, std::vector<std::string>& chain) {
+    if (std::find(chain.begin(), chain.end(), subcircuit.name.text) != chain.end()) {
+      diagnostics_.error(card.subcircuit.where,
+                         "subcircuit '" + subcircuit.name.text + "' instantiates itself");
+      return std::nullopt;
+    }
+    if (chain.size() >= max_subcircuit_depth) {
+      diagnostics_.error(card.subcircuit.where, "subcircuits nest more than " +
+                                                    std::to_string(max_subcircuit_depth) +
+                                                    " levels deep");
+      return std::nullopt;
+    }
+    // A count from another place in the hierarchy holds here unless this place is deeper and
+    // the walk must find where the nesting exceeds the depth.
+    std::pair key{&subcircuit, &enclosing};
+    if (auto known = expansions_.find(key);
+        known != expansions_.end() && chain.size() + known->second.depth < max_subcircuit_depth)
+      return known->second;
+    std::vector<const ast::Card*> cards;
+    flatten_includes(subcircuit.body, cards);
+    chain.push_back(subcircuit.name.text);
+    auto expansion = walk(cards, scope(subcircuit, cards, enclosing), chain);
+    chain.pop_back();
+    if (expansion) expansions_[key] = *expansion;
+    return expansion;
+  }
+
+  // What the names in a subcircuit's body resolve to: its own subcircuits, then `enclosing`.
+  // Bodies defining none share `enclosing`, so that counts are shared as widely as possible.
+  const Definitions& scope(const ast::Subcircuit& subcircuit,
+                           const std::vector<const ast::Card*>& cards,
+                           const Definitions& enclosing) {
+    if (std::none_of(cards.begin(), cards.end(), [](const ast::Card* card) {
+          return std::holds_alternative<ast::Subcircuit>(card->node);
+        }))
+      return enclosing;
+    std::unique_ptr<Definitions>& own = scopes_[{&subcircuit, &enclosing}];
+    if (!own) {
+      own = std::make_unique<Definitions>(Definitions{&enclosing, "", {}, {}});
+      define_subcircuits(cards, *own, diagnostics_);
+    }
+    return *own;
+  }
+
+  using Key = std::pair<const ast::Subcircuit*, const Definitions*>;
+  Diagnostics& diagnostics_;
+  std::size_t max_elements_;
+  std::map<Key, Expansion> expansions_;
+  std::map<Key, std::unique_ptr<Definitions>> scopes_;
+};
+
 // Where the cards of one body (top level or an instance's subcircuit) go in the flat circuit.
 struct Instance {
   std::string prefix;                                 // "" or "x1." or "x1.x2."
   std::unordered_map<std::string, std::string> ports;  // subcircuit port -> connected node
   const Scope* scope;
   const Definitions* definitions;
-  std::vector<std::string> subcircuit_chain;  // subcircuits being expanded, outermost first
 
   std::string node(const std::string& name) const {
     if (name == "0" || name == "gnd") return "0";
@@ -138,7 +285,8 @@ struct Instance {
 
 class Elaborator {
  public:
-  explicit Elaborator(Diagnostics& diagnostics) : diagnostics_(diagnostics) {}
+  Elaborator(Diagnostics& diagnostics, std::size_t max_elements)
+      : diagnostics_(diagnostics), max_elements_(max_elements) {}
 
   std::optional<FlatCircuit> run(const ast::Netlist& netlist) {
     int errors_before = diagnostics_.error_count();
@@ -148,9 +296,10 @@ class Elaborator {
     has_tran_ = std::any_of(cards.begin(), cards.end(), [](const ast::Card* card) {
       return std::holds_alternative<ast::TranCard>(card->node);
     });
+    if (!Hierarchy(diagnostics_, max_elements_).check(cards)) return std::nullopt;
     Scope global;
     Definitions definitions;
-    Instance top{"", {}, &global, &definitions, {}};
+    Instance top{"", {}, &global, &definitions};
     elaborate_body(cards, top, global, definitions);
     check_references();
     for (const Diagnostic& diagnostic : diagnostics_.all())
@@ -160,16 +309,6 @@ class Elaborator {
   }
 
  private:
-  static void flatten_includes(const std::vector<ast::Card>& cards,
-                               std::vector<const ast::Card*>& out) {
-    for (const ast::Card& card : cards) {
-      if (auto* include = std::get_if<ast::Include>(&card.node))
-        flatten_includes(include->cards, out);
-      else
-        out.push_back(&card);
-    }
-  }
-
   // ---- expressions ------------------------------------------------------------------------
 
   std::optional<double> evaluate(const Expression& expression, const Scope& scope) {
@@ -359,14 +498,10 @@ class Elaborator {
 
   void elaborate_body(const std::vector<const ast::Card*>& cards, const Instance& instance,
                       Scope& scope, Definitions& definitions) {
+    define_subcircuits(cards, definitions, diagnostics_);
     std::vector<std::pair<ast::Word, ExpressionPtr>> parameters;
     for (const ast::Card* card : cards) {
-      if (auto* subcircuit = std::get_if<ast::Subcircuit>(&card->node)) {
-        bool inserted = definitions.subcircuits.emplace(subcircuit->name.text, subcircuit).second;
-        if (!inserted)
-          diagnostics_.error(subcircuit->name.where,
-                             "subcircuit '" + subcircuit->name.text + "' is defined twice");
-      } else if (auto* model = std::get_if<ast::ModelCard>(&card->node)) {
+      if (auto* model = std::get_if<ast::ModelCard>(&card->node)) {
         bool inserted = definitions.models.emplace(model->name.text, model).second;
         if (!inserted)
           diagnostics_.error(model->name.where, "model '" + model->name.text + "' is defined twice");
@@ -621,20 +756,7 @@ class Elaborator {
                          "subcircuit '" + card.subcircuit.text + "' is not defined");
       return;
     }
-    if (circuit_.elements.size() >= max_flat_elements) {
-      if (!too_large_reported_)
-        diagnostics_.error(card.name.where, "the circuit expands to more than " +
-                                                std::to_string(max_flat_elements) + " elements");
-      too_large_reported_ = true;
-      return;
-    }
-    const auto& chain = instance.subcircuit_chain;
-    if (std::find(chain.begin(), chain.end(), subcircuit->name.text) != chain.end() ||
-        chain.size() >= max_subcircuit_depth) {
-      diagnostics_.error(card.subcircuit.where,
-                         "subcircuit '" + subcircuit->name.text + "' instantiates itself");
-      return;
-    }
+    // Recursion, depth and size were checked (Hierarchy) before anything was built.
     if (card.nodes.size() != subcircuit->ports.size()) {
       diagnostics_.error(card.name.where, card.name.text + " connects " +
                                               count(card.nodes.size(), "node") + "; subcircuit '" +
@@ -646,8 +768,6 @@ class Elaborator {
     inner.prefix = instance.element(card.name.text) + ".";
     for (std::size_t i = 0; i < card.nodes.size(); ++i)
       inner.ports[subcircuit->ports[i].text] = instance.node(card.nodes[i].text);
-    inner.subcircuit_chain = chain;
-    inner.subcircuit_chain.push_back(subcircuit->name.text);
 
     // Instance values are evaluated where the instance is; defaults inside the subcircuit.
     Scope scope{instance.scope, {}};
@@ -813,8 +933,8 @@ class Elaborator {
 
   Diagnostics& diagnostics_;
   FlatCircuit circuit_;
+  std::size_t max_elements_;
   bool has_tran_ = false;
-  bool too_large_reported_ = false;
   std::unordered_map<std::string, std::size_t> element_index_;
   std::vector<ControlUse> control_uses_;
   std::vector<std::pair<std::string, SourceRange>> branch_current_uses_;
@@ -822,8 +942,9 @@ class Elaborator {
 
 }  // namespace
 
-std::optional<FlatCircuit> elaborate(const ast::Netlist& netlist, Diagnostics& diagnostics) {
-  return Elaborator(diagnostics).run(netlist);
+std::optional<FlatCircuit> elaborate(const ast::Netlist& netlist, Diagnostics& diagnostics,
+                                     std::size_t max_elements) {
+  return Elaborator(diagnostics, max_elements).run(netlist);
 }
 
 std::optional<FlatCircuit> load(const std::filesystem::path& path, Diagnostics& diagnostics) {

@@ -1,6 +1,7 @@
 // Public entry points of the netlist layer: text -> AST -> flat circuit.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -17,8 +18,13 @@ namespace netlist {
 ast::Netlist parse_text(std::string text, std::string path, Diagnostics& diagnostics);
 ast::Netlist parse_file(const std::filesystem::path& path, Diagnostics& diagnostics);
 
+// A circuit whose subcircuits expand to more elements than this is refused (counted before any
+// is built).
+inline constexpr std::size_t max_flat_elements = 10'000'000;
+
 // Evaluate parameters, expand subcircuits, check references. nullopt when any error occurred.
-std::optional<FlatCircuit> elaborate(const ast::Netlist& netlist, Diagnostics& diagnostics);
+std::optional<FlatCircuit> elaborate(const ast::Netlist& netlist, Diagnostics& diagnostics,
+                                     std::size_t max_elements = max_flat_elements);
 
 // parse_file then elaborate; nullopt if either reported an error.
 std::optional<FlatCircuit> load(const std::filesystem::path& path, Diagnostics& diagnostics);

@@ -2,8 +2,12 @@
 // sources, models, includes and the analysis cards.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "netlist/netlist.hpp"
 
@@ -252,6 +256,127 @@ TEST(Elaborate, BehavioralExpressionsKeepConditions) {
   // fns = 1+0+0+2+2+0+1+0+0; more = 0+0+1+0+1+1+2+4-4; rest = -1+1+0+3+1+2
   EXPECT_DOUBLE_EQ(element(circuit, "r1").value, 6.0);
   EXPECT_EQ(element(circuit, "r2").value, 5.0 + 6.0);
+}
+
+// ---- the hierarchy check: element count, depth ---------------------------------------------
+
+struct Elaborated {
+  netlist::Diagnostics diagnostics;
+  std::optional<FlatCircuit> circuit;
+
+  std::vector<netlist::Diagnostic> errors() const {
+    std::vector<netlist::Diagnostic> errors;
+    for (const netlist::Diagnostic& d : diagnostics.all())
+      if (d.severity == netlist::Severity::error) errors.push_back(d);
+    return errors;
+  }
+};
+
+Elaborated elaborate_limited(const std::string& text,
+                             std::size_t max_elements = netlist::max_flat_elements) {
+  Elaborated result;
+  auto parsed = netlist::parse_text(text, "t.cir", result.diagnostics);
+  EXPECT_FALSE(result.diagnostics.has_errors()) << result.diagnostics.to_string();
+  result.circuit = netlist::elaborate(parsed, result.diagnostics, max_elements);
+  return result;
+}
+
+// The 1-based line of the first occurrence of `needle`.
+int line_of(const std::string& text, const std::string& needle) {
+  std::size_t at = text.find(needle);
+  EXPECT_NE(at, std::string::npos) << needle;
+  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + at, '\n'));
+}
+
+// Subcircuits l1 .. l<levels>, each with `fanout` instances of the one below, over l0 (one
+// resistor); the top level has V1 and one instance of l<levels>: 1 + fanout^levels elements.
+std::string nested(int levels, int fanout) {
+  std::string text = "t\n.subckt l0 a\nR1 a 0 1\n.ends\n";
+  for (int level = 1; level <= levels; ++level) {
+    text += ".subckt l" + std::to_string(level) + " a\n";
+    for (int i = 0; i < fanout; ++i)  // appended in pieces: GCC 12 warns (-Wrestrict) on "X" + ...
+      text.append("X").append(std::to_string(i)).append(" a l")
+          .append(std::to_string(level - 1)).append("\n");
+    text += ".ends\n";
+  }
+  return text + "V1 n 0 1\nXtop n l" + std::to_string(levels) + "\n";
+}
+
+void expect_one_error(const Elaborated& e, const std::string& message, int line, int column) {
+  EXPECT_FALSE(e.circuit);
+  auto errors = e.errors();
+  ASSERT_EQ(errors.size(), 1u) << e.diagnostics.to_string();
+  EXPECT_EQ(errors[0].message, message);
+  EXPECT_EQ(errors[0].where.begin.line, line);
+  EXPECT_EQ(errors[0].where.begin.column, column);
+}
+
+TEST(Elaborate, ElementCountAtTheLimitIsBuiltAndOneMoreIsRefusedAtTheTopLevelInstance) {
+  std::string text = nested(3, 4);  // 1 + 4^3 = 65 elements
+  Elaborated at_limit = elaborate_limited(text, 65);
+  ASSERT_TRUE(at_limit.circuit) << at_limit.diagnostics.to_string();
+  EXPECT_EQ(at_limit.circuit->elements.size(), 65u);
+  expect_one_error(elaborate_limited(text, 64), "the circuit expands to more than 64 elements",
+                   line_of(text, "Xtop"), 1);
+}
+
+TEST(Elaborate, ElementCountResolvesSubcircuitsAsTheExpansionDoes) {
+  // inner is defined in outer's body; user's instances inside outer see it.
+  std::string text =
+      "t\n"
+      ".subckt user a\nXq a inner\n.ends\n"
+      ".subckt outer a\n.subckt inner b\nR1 b 0 1\nR2 b 0 1\n.ends\nX1 a user\nX2 a user\n.ends\n"
+      "X1 n outer\n";
+  Elaborated at_limit = elaborate_limited(text, 4);
+  ASSERT_TRUE(at_limit.circuit) << at_limit.diagnostics.to_string();
+  EXPECT_EQ(at_limit.circuit->elements.size(), 4u);
+  EXPECT_TRUE(at_limit.circuit->find_element("x1.x2.xq.r2"));
+  expect_one_error(elaborate_limited(text, 3), "the circuit expands to more than 3 elements",
+                   line_of(text, "X1 n outer"), 1);
+}
+
+TEST(Elaborate, TenLevelsOfTenInstancesAreRefusedWithoutBuildingThem) {
+  // 1 + 10^10 elements: counted per subcircuit, refused in milliseconds (building them until
+  // the limit took 40 s).
+  std::string text = nested(10, 10);
+  expect_one_error(elaborate_limited(text), "the circuit expands to more than 10000000 elements",
+                   line_of(text, "Xtop"), 1);
+}
+
+TEST(Elaborate, ElementCountSaturates) {
+  // 2^64 elements: a wrapping count would be 0 (and then 1 with V1).
+  std::string text = nested(64, 2);
+  expect_one_error(elaborate_limited(text), "the circuit expands to more than 10000000 elements",
+                   line_of(text, "Xtop"), 1);
+}
+
+// Subcircuits s0 (one resistor) .. s<n-1>, each instantiating the one below.
+std::string chain(int n) {
+  std::string text = "t\n.subckt s0 a\nR1 a 0 1\n.ends\n";
+  for (int k = 1; k < n; ++k)
+    text += ".subckt s" + std::to_string(k) + " a\nX1 a s" + std::to_string(k - 1) + "\n.ends\n";
+  return text;
+}
+
+TEST(Elaborate, SubcircuitsNestAtMostOneHundredLevels) {
+  std::string hundred = chain(100) + "X1 n s99\n";
+  Elaborated fine = elaborate_limited(hundred);
+  ASSERT_TRUE(fine.circuit) << fine.diagnostics.to_string();
+  EXPECT_EQ(fine.circuit->elements.size(), 1u);
+  std::string name;  // x1. (the top-level instance) and x1. in s99 .. s1
+  for (int level = 0; level < 100; ++level) name += "x1.";
+  EXPECT_EQ(fine.circuit->elements[0].name, name + "r1");
+
+  // The 101st level: reported at the X card that would open it (in s1, instantiating s0).
+  std::string deeper = chain(101) + "X1 n s100\n";
+  expect_one_error(elaborate_limited(deeper), "subcircuits nest more than 100 levels deep",
+                   line_of(deeper, "X1 a s0"), 6);
+
+  // s99 counted first where it nests 100 levels, then reached one level deeper through u: the
+  // count of s99 is reused only where it cannot nest too deep.
+  std::string reused = chain(100) + ".subckt u a\nX1 a s99\n.ends\nX1 n s99\nX2 n u\n";
+  expect_one_error(elaborate_limited(reused), "subcircuits nest more than 100 levels deep",
+                   line_of(reused, "X1 a s0"), 6);
 }
 
 }  // namespace

@@ -43,10 +43,6 @@ KNOWN_FAILURES = {
         "consistent state the diode is still short of turning on. Locating on a corrector solve at each trial time "
         "fixes this case but moves charge-sharing events (its change to the differential unknowns); the fix is to "
         "re-solve the step from its start to the trial time.",
-    "bad_input.expansion_over_limit":
-        "netlist (elaboration): the refusal is right ('expands to more than 10000000 elements') but takes about "
-        "40 s in a Release build (10 million elements are built before the count stops them), minutes under the "
-        "sanitizers.",
 }
 
 BAD_INPUT_SECONDS = 10  # a refusal takes milliseconds; 10 s leaves room for the sanitizer build

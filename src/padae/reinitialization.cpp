@@ -158,7 +158,9 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
     return std::nullopt;
   }
   const Vector q_plus = newton_.load().q;
-  auto consistent = settle(t, x_plus, q_plus, p_to, h_settle);
+  auto settled = settle(t, x_plus, q_plus, p_to, h_settle);
+  if (!settled) return std::nullopt;
+  auto consistent = consistent_state(t, x_plus, *settled, p_to);
   if (!consistent) return consistent;
   consistent->impulse = h_impulse * x_plus;
   // A jump moves q by far more than the smooth motion does over the impulse step.
@@ -189,9 +191,9 @@ double Reinitializer::settle_step(double t, double h_reference) const {
 // steps stay well conditioned. A mode faster than the steps (a switch's RC of a nanosecond
 // against microsecond steps) is not polynomial over them: the difference between the quadratic
 // and the linear extrapolation shows it, and h is shortened until it is resolved.
-std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_plus,
-                                                     const Vector& q_plus, const Predicates& p,
-                                                     double h) {
+std::optional<Reinitializer::Settled> Reinitializer::settle(double t, const Vector& x_plus,
+                                                           const Vector& q_plus,
+                                                           const Predicates& p, double h) {
   const double h_shortest = 1e3 * time_resolution(t);
   const Vector inverse_weight =
       (options_.rtol * x_plus.cwiseAbs() + absolute_tolerance_).cwiseInverse();
@@ -225,22 +227,32 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
     const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
     if (weighted_max_norm(curvature, inverse_weight) <= kSettleAccuracy || h * 1e-3 < h_shortest) break;
   }
-  ConsistentState state;
-  state.x_impulse = x_plus;
-  state.x = extrapolated;
+  Settled settled{std::move(extrapolated), std::move(x_one), h};
   // The vanishing step's differential unknowns are exact where it was well conditioned, and
   // the extrapolation agrees with them to Newton's tolerance; where they differ by more than a
   // tenth of the error tolerance the vanishing step lost the hidden algebraic directions.
-  if (weighted_max_norm(x_plus - extrapolated, differential_weight) <= 0.1)
+  if (weighted_max_norm(x_plus - settled.x, differential_weight) <= 0.1)
     for (int i = 0; i < system_.size(); ++i)
-      if (system_.kind(i) == UnknownKind::differential) state.x[i] = x_plus[i];
+      if (system_.kind(i) == UnknownKind::differential) settled.x[i] = x_plus[i];
+  return settled;
+}
+
+// The state after a jump: the settled x, q and its right derivative there, and where the new
+// motion heads (the first settling step).
+std::optional<ConsistentState> Reinitializer::consistent_state(double t, const Vector& x_plus,
+                                                               const Settled& settled,
+                                                               const Predicates& p) {
+  ConsistentState state;
+  state.x_impulse = x_plus;
+  state.x = settled.x;
   if (!derivatives_at(t, p, state)) return std::nullopt;
-  state.x_derivative = (x_one - state.x) / h;
+  const double h = settled.h;
+  state.x_derivative = (settled.x_first_step - state.x) / h;
   state.t_heading = t + h;
-  state.x_heading = x_one;
+  state.x_heading = settled.x_first_step;
   // The first settling step's -f is q' at t + h: a fast mode the new motion starts shows as
   // curvature, which bounds the first step after the restart.
-  if (newton_.evaluate(t + h, x_one, p) != EvalStatus::ok) {
+  if (newton_.evaluate(t + h, settled.x_first_step, p) != EvalStatus::ok) {
     failure_reason_ = "the model cannot be evaluated after the event";
     return std::nullopt;
   }
@@ -253,9 +265,9 @@ std::optional<Vector> Reinitializer::project(double t, const Vector& x_guess, co
                                             double h_reference) {
   if (newton_.evaluate(t, x_guess, p) != EvalStatus::ok) return std::nullopt;
   const Vector q = newton_.load().q;
-  auto state = settle(t, x_guess, q, p, settle_step(t, h_reference));
-  if (!state) return std::nullopt;
-  return state->x;
+  auto settled = settle(t, x_guess, q, p, settle_step(t, h_reference));
+  if (!settled) return std::nullopt;
+  return std::move(settled->x);
 }
 
 // q and its right derivative -f (dynamic rows) at the consistent state.x.

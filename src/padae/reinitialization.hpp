@@ -73,8 +73,17 @@ class Reinitializer {
                                         Vector& x);
   double time_resolution(double t) const;
   double settle_step(double t, double h_reference) const;
-  std::optional<ConsistentState> settle(double t, const Vector& x_plus, const Vector& q_plus,
-                                        const Predicates& p, double h);
+  // The consistent state at t + 0 the settling steps reach, and the first of them (length h):
+  // where the new motion heads.
+  struct Settled {
+    Vector x;
+    Vector x_first_step;
+    double h;
+  };
+  std::optional<Settled> settle(double t, const Vector& x_plus, const Vector& q_plus,
+                                const Predicates& p, double h);
+  std::optional<ConsistentState> consistent_state(double t, const Vector& x_plus,
+                                                  const Settled& settled, const Predicates& p);
   bool derivatives_at(double t, const Predicates& p, ConsistentState& state);
 
   System& system_;

@@ -106,15 +106,17 @@ struct Integrator::Impl {
   Vector absolute_tolerance;
   NewtonMatrix newton;
   Reinitializer reinitializer;
-  // Dense output's own Newton matrix and counters: writing output never changes the
-  // integration (its matrix, its statistics). Made on first use.
+  // Dense output's own Newton matrices and counters: writing output never changes the
+  // integration (its matrix, its statistics). Made on first use. Its settling factorizations
+  // are kept from row to row.
   struct OutputProjection {
     Statistics statistics;
     NewtonMatrix newton;
     Reinitializer reinitializer;
     OutputProjection(System& system, const Options& options, const Vector& absolute_tolerance)
         : newton(system, statistics, absolute_tolerance / options.rtol),
-          reinitializer(system, newton, statistics, options, absolute_tolerance) {}
+          reinitializer(system, newton, statistics, options, absolute_tolerance,
+                        SettlingFactorizations::kept) {}
   };
   std::unique_ptr<OutputProjection> output_projection;
 

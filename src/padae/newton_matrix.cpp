@@ -126,7 +126,12 @@ NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Pred
                                            double cj) {
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
   for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
-  return factor_loaded();
+  const Outcome outcome = factor_loaded();
+  if (outcome == Outcome::ok) {
+    factored_mode_ = p;
+    factored_cj_ = cj;
+  }
+  return outcome;
 }
 
 NewtonMatrix::Outcome NewtonMatrix::factor_shifted(double t, const Vector& x, const Predicates& p,
@@ -156,6 +161,7 @@ NewtonMatrix::Outcome NewtonMatrix::factor_blend(double t, const Vector& x,
 }
 
 NewtonMatrix::Outcome NewtonMatrix::factor_loaded() {
+  factored_cj_ = 0;
   for (std::size_t k = 0; k < matrix_.size(); ++k) abs_dq_dx_[k] = std::abs(load_.dq_dx[k]);
   // Auxiliary unknowns are held: their rows become x_i = held value.
   if (!auxiliary_list_.empty()) {

@@ -30,8 +30,14 @@ class NewtonMatrix {
   Outcome factor_blend(double t, const Vector& x, const Predicates& p_from, const Predicates& p_to,
                        double lambda, double cj);
 
+  // The last factorization is df/dx + cj dq/dx of mode p (at some x and t).
+  bool factored_for(const Predicates& p, double cj) const {
+    return factored_cj_ == cj && factored_mode_ == p;
+  }
+
   void solve(Vector& b) const { lu_.solve(b); }
   const Load& load() const { return load_; }
+  const Vector& typical() const { return typical_; }
   // |dq/dx| summed into row weights: sum_j |dq_ij/dx_j| * scale_j (zero for algebraic rows).
   void charge_scale(const Vector& scale, Vector& out) const;
   // Zeroes the entries of v on algebraic rows (no dq/dx at the last derivative evaluation).
@@ -60,6 +66,8 @@ class NewtonMatrix {
   std::vector<int> diagonal_;      // value index of (i, i)
   std::vector<std::vector<int>> column_groups_;  // structurally orthogonal columns, for FD
   Vector typical_;
+  Predicates factored_mode_;
+  double factored_cj_ = 0;  // 0: no factorization of factor()'s form
 };
 
 }  // namespace padae

@@ -22,48 +22,70 @@ constexpr double kSettleAccuracy = 1e-2;  // extrapolation error, in units of th
 }  // namespace
 
 Reinitializer::Reinitializer(System& system, NewtonMatrix& newton, Statistics& statistics,
-                             const Options& options, const Vector& absolute_tolerance)
+                             const Options& options, const Vector& absolute_tolerance,
+                             SettlingFactorizations settling_factorizations)
     : system_(system),
       newton_(newton),
       statistics_(statistics),
       options_(options),
-      absolute_tolerance_(absolute_tolerance) {}
+      absolute_tolerance_(absolute_tolerance),
+      settling_factorizations_(settling_factorizations) {
+  if (settling_factorizations == SettlingFactorizations::kept)
+    for (auto& matrix : kept_settling_matrices_)
+      matrix = std::make_unique<NewtonMatrix>(system, statistics, newton.typical());
+}
 
-bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_start,
-                                   const Vector& held, const Predicates& p_from,
-                                   const Predicates& p_to, double lambda, Vector& x) {
+bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h,
+                                   const Vector& q_start, const Vector& held,
+                                   const Predicates& p_from, const Predicates& p_to,
+                                   double lambda, Vector& x) {
   const double cj = 1 / h;
   const bool blended = lambda < 1;
   auto factor = [&]() {
-    return blended ? newton_.factor_blend(t_eval, x, p_from, p_to, lambda, cj)
-                   : newton_.factor(t_eval, x, p_to, cj);
+    return blended ? newton.factor_blend(t_eval, x, p_from, p_to, lambda, cj)
+                   : newton.factor(t_eval, x, p_to, cj);
   };
   auto evaluate = [&]() {
-    if (!blended) return newton_.evaluate(t_eval, x, p_to) == EvalStatus::ok;
-    return newton_.factor_blend(t_eval, x, p_from, p_to, lambda, cj) == NewtonMatrix::Outcome::ok;
+    if (!blended) return newton.evaluate(t_eval, x, p_to) == EvalStatus::ok;
+    return newton.factor_blend(t_eval, x, p_from, p_to, lambda, cj) == NewtonMatrix::Outcome::ok;
   };
 
   double previous_norm = std::numeric_limits<double>::infinity();
-  bool refactor = true;
+  // Iterating on a factorization kept from an earlier call, until the first refactorization.
+  bool stale = settling_factorizations_ == SettlingFactorizations::kept && !blended &&
+               newton.factored_for(p_to, cj);
+  bool refactor = !stale;
+  const Vector guess = stale ? x : Vector();
+  // A stale matrix can lead the iterate out of the model's domain, or away: Newton starts
+  // again from the guess on a fresh matrix before it gives up.
+  auto start_again_fresh = [&]() {
+    if (!stale) return false;
+    refactor = true;
+    x = guess;
+    previous_norm = std::numeric_limits<double>::infinity();
+    return true;
+  };
   for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
     if (refactor) {
+      stale = false;
       auto outcome = factor();
       if (outcome != NewtonMatrix::Outcome::ok) {
         failure_reason_ = outcome == NewtonMatrix::Outcome::singular
                               ? "the circuit equations are singular in the new mode"
                               : "the model cannot be evaluated in the new mode";
-        failure_unknown_ = outcome == NewtonMatrix::Outcome::singular ? newton_.singular_column() : -1;
+        failure_unknown_ = outcome == NewtonMatrix::Outcome::singular ? newton.singular_column() : -1;
         return false;
       }
     } else if (!evaluate()) {
+      if (start_again_fresh()) continue;
       failure_reason_ = "the model cannot be evaluated in the new mode";
       return false;
     }
     ++statistics_.newton_iterations;
-    const Load& load = newton_.load();
+    const Load& load = newton.load();
     Vector delta = (load.q - q_start) * cj + load.f;
-    for (int i : newton_.auxiliary_unknowns()) delta[i] = x[i] - held[i];
-    newton_.solve(delta);
+    for (int i : newton.auxiliary_unknowns()) delta[i] = x[i] - held[i];
+    newton.solve(delta);
     x -= delta;
     // The tolerance never asks for less than round-off in x.
     Vector inverse_weight =
@@ -71,6 +93,7 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     int worst = -1;
     const double norm = weighted_max_norm(delta, inverse_weight, &worst);
     if (!std::isfinite(norm)) {
+      if (start_again_fresh()) continue;
       failure_reason_ = "Newton's method diverges in the new mode";
       failure_unknown_ = worst;
       return false;
@@ -88,22 +111,22 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
   return false;
 }
 
-bool Reinitializer::backward_euler_with_continuation(double t_eval, double h,
-                                                     const Vector& q_start,
+bool Reinitializer::backward_euler_with_continuation(NewtonMatrix& newton, double t_eval,
+                                                     double h, const Vector& q_start,
                                                      const Predicates& p_from,
                                                      const Predicates& p_to, Vector& x) {
   const Vector guess = x;
-  if (backward_euler(t_eval, h, q_start, guess, p_from, p_to, 1.0, x)) return true;
+  if (backward_euler(newton, t_eval, h, q_start, guess, p_from, p_to, 1.0, x)) return true;
   if (p_from == p_to) return false;
   // Continuation in a parameter (the paper's remedy): from the old mode, whose solution is
   // near x, to the new one.
   x = guess;
-  if (!backward_euler(t_eval, h, q_start, guess, p_from, p_to, 0.0, x)) return false;
+  if (!backward_euler(newton, t_eval, h, q_start, guess, p_from, p_to, 0.0, x)) return false;
   double lambda = 0, increment = 0.25;
   while (lambda < 1) {
     double next = std::min(1.0, lambda + increment);
     Vector trial = x;
-    if (backward_euler(t_eval, h, q_start, guess, p_from, p_to, next, trial)) {
+    if (backward_euler(newton, t_eval, h, q_start, guess, p_from, p_to, next, trial)) {
       x = trial;
       lambda = next;
       increment = std::min(2 * increment, 1.0);
@@ -142,8 +165,8 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
     for (h_impulse = h_vanishing;; h_impulse = std::min(1e3 * h_impulse, h_settle)) {
       x_plus = x_start;
       bool solved = continuation
-                        ? backward_euler_with_continuation(t + h_impulse, h_impulse, q_before, p_from, p_to, x_plus)
-                        : backward_euler(t + h_impulse, h_impulse, q_before, x_start, p_from, p_to, 1.0, x_plus);
+                        ? backward_euler_with_continuation(newton_, t + h_impulse, h_impulse, q_before, p_from, p_to, x_plus)
+                        : backward_euler(newton_, t + h_impulse, h_impulse, q_before, x_start, p_from, p_to, 1.0, x_plus);
       if (solved) break;
       if (h_impulse >= h_settle) {
         h_impulse = 0;
@@ -179,9 +202,12 @@ double Reinitializer::time_resolution(double t) const {
 }
 
 // The settling steps (up to 4h) stay short of the next source corner: past it the motion is
-// not the one that starts at t.
+// not the one that starts at t. Kept factorizations are for one length each: the length is
+// rounded up to a power of two, so that steps of similar length share it (the curvature test
+// in settle() still holds the extrapolation to its accuracy).
 double Reinitializer::settle_step(double t, double h_reference) const {
-  const double h = std::max(kSettleFraction * h_reference, 1e5 * time_resolution(t));
+  double h = std::max(kSettleFraction * h_reference, 1e5 * time_resolution(t));
+  if (settling_factorizations_ == SettlingFactorizations::kept) h = std::exp2(std::ceil(std::log2(h)));
   return std::min(h, (system_.next_time_event(t) - t) / 8);
 }
 
@@ -207,11 +233,11 @@ std::optional<Reinitializer::Settled> Reinitializer::settle(double t, const Vect
   bool have_extrapolation = false;
   for (;; h *= 1e-3) {
     Vector one = x_plus;
-    bool solved = backward_euler_with_continuation(t + h, h, q_plus, p, p, one);
+    bool solved = backward_euler_with_continuation(settling_matrix(0), t + h, h, q_plus, p, p, one);
     Vector two = one;
-    solved = solved && backward_euler_with_continuation(t + 2 * h, 2 * h, q_plus, p, p, two);
+    solved = solved && backward_euler_with_continuation(settling_matrix(1), t + 2 * h, 2 * h, q_plus, p, p, two);
     Vector four = two;
-    solved = solved && backward_euler_with_continuation(t + 4 * h, 4 * h, q_plus, p, p, four);
+    solved = solved && backward_euler_with_continuation(settling_matrix(2), t + 4 * h, 4 * h, q_plus, p, p, four);
     if (!solved && have_extrapolation) {
       h *= 1e3;
       break;

@@ -19,6 +19,8 @@
 // residuals of the old and the new mode.
 #pragma once
 
+#include <array>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -40,10 +42,18 @@ struct ConsistentState {
   Vector x_heading;
 };
 
+// Whether each settling step (lengths h, 2h, 4h) keeps its own factorization from one call to
+// the next. Dense output keeps them: its rows follow one another in time and mode, so a matrix
+// factored for an earlier row still makes modified Newton contract fast, and a fresh one is
+// factored only where it does not. Events factor afresh on the caller's matrix: the integration
+// never depends on what was factored before.
+enum class SettlingFactorizations { fresh, kept };
+
 class Reinitializer {
  public:
   Reinitializer(System& system, NewtonMatrix& newton, Statistics& statistics,
-                const Options& options, const Vector& absolute_tolerance);
+                const Options& options, const Vector& absolute_tolerance,
+                SettlingFactorizations settling_factorizations = SettlingFactorizations::fresh);
 
   // The state after the predicates changed from p_from to p_to at t; x_start already holds
   // the explicit jumps X e. h_reference: a step size typical of the solution near t.
@@ -66,11 +76,18 @@ class Reinitializer {
  private:
   // Backward Euler of length h from charges q_start, for the blend of modes
   // (1 - lambda) p_from + lambda p_to, evaluated at t_eval; x holds the guess and the result.
-  bool backward_euler(double t_eval, double h, const Vector& q_start, const Vector& held,
-                      const Predicates& p_from, const Predicates& p_to, double lambda, Vector& x);
-  bool backward_euler_with_continuation(double t_eval, double h, const Vector& q_start,
-                                        const Predicates& p_from, const Predicates& p_to,
-                                        Vector& x);
+  // Newton iterates on `newton`, starting from its factorization where that is kept and for
+  // this mode and length.
+  bool backward_euler(NewtonMatrix& newton, double t_eval, double h, const Vector& q_start,
+                      const Vector& held, const Predicates& p_from, const Predicates& p_to,
+                      double lambda, Vector& x);
+  bool backward_euler_with_continuation(NewtonMatrix& newton, double t_eval, double h,
+                                        const Vector& q_start, const Predicates& p_from,
+                                        const Predicates& p_to, Vector& x);
+  // The matrix of settling step 0, 1, 2 (length h, 2h, 4h).
+  NewtonMatrix& settling_matrix(int step) {
+    return kept_settling_matrices_[step] ? *kept_settling_matrices_[step] : newton_;
+  }
   double time_resolution(double t) const;
   double settle_step(double t, double h_reference) const;
   // The consistent state at t + 0 the settling steps reach, and the first of them (length h):
@@ -91,6 +108,8 @@ class Reinitializer {
   Statistics& statistics_;
   const Options& options_;
   const Vector& absolute_tolerance_;
+  const SettlingFactorizations settling_factorizations_;
+  std::array<std::unique_ptr<NewtonMatrix>, 3> kept_settling_matrices_;  // empty when fresh
   std::string failure_reason_;
   int failure_unknown_ = -1;
   std::optional<Vector> stalled_state_;

@@ -181,7 +181,8 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
     return std::nullopt;
   }
   const Vector q_plus = newton_.load().q;
-  auto settled = settle(t, x_plus, q_plus, p_to, h_settle);
+  // The new mode's motion is not known before its first settling step.
+  auto settled = settle(t, x_plus, q_plus, p_to, h_settle, Vector::Zero(system_.size()));
   if (!settled) return std::nullopt;
   auto consistent = consistent_state(t, x_plus, *settled, p_to);
   if (!consistent) return consistent;
@@ -219,7 +220,8 @@ double Reinitializer::settle_step(double t, double h_reference) const {
 // and the linear extrapolation shows it, and h is shortened until it is resolved.
 std::optional<Reinitializer::Settled> Reinitializer::settle(double t, const Vector& x_plus,
                                                            const Vector& q_plus,
-                                                           const Predicates& p, double h) {
+                                                           const Predicates& p, double h,
+                                                           const Vector& motion_guess) {
   const double h_shortest = 1e3 * time_resolution(t);
   const Vector inverse_weight =
       (options_.rtol * x_plus.cwiseAbs() + absolute_tolerance_).cwiseInverse();
@@ -232,11 +234,11 @@ std::optional<Reinitializer::Settled> Reinitializer::settle(double t, const Vect
   // extrapolation stands.
   bool have_extrapolation = false;
   for (;; h *= 1e-3) {
-    Vector one = x_plus;
+    Vector one = x_plus + h * motion_guess;
     bool solved = backward_euler_with_continuation(settling_matrix(0), t + h, h, q_plus, p, p, one);
-    Vector two = one;
+    Vector two = one + h * motion_guess;
     solved = solved && backward_euler_with_continuation(settling_matrix(1), t + 2 * h, 2 * h, q_plus, p, p, two);
-    Vector four = two;
+    Vector four = two + 2 * h * motion_guess;
     solved = solved && backward_euler_with_continuation(settling_matrix(2), t + 4 * h, 4 * h, q_plus, p, p, four);
     if (!solved && have_extrapolation) {
       h *= 1e3;
@@ -287,11 +289,14 @@ std::optional<ConsistentState> Reinitializer::consistent_state(double t, const V
   return state;
 }
 
-std::optional<Vector> Reinitializer::project(double t, const Vector& x_guess, const Predicates& p,
+std::optional<Vector> Reinitializer::project(double t, const Vector& x_guess,
+                                            const Vector& x_derivative_guess, const Predicates& p,
                                             double h_reference) {
   if (newton_.evaluate(t, x_guess, p) != EvalStatus::ok) return std::nullopt;
   const Vector q = newton_.load().q;
-  auto settled = settle(t, x_guess, q, p, settle_step(t, h_reference));
+  Vector motion = x_derivative_guess;
+  for (int i : newton_.auxiliary_unknowns()) motion[i] = 0;  // held by the settling steps
+  auto settled = settle(t, x_guess, q, p, settle_step(t, h_reference), motion);
   if (!settled) return std::nullopt;
   return std::move(settled->x);
 }

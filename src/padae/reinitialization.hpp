@@ -63,8 +63,9 @@ class Reinitializer {
   // x(t) with the charges of x_guess and everything else consistent with them: the algebraic
   // unknowns and the hidden algebraic directions (a floating capacitor's common mode) that no
   // error test controls are solved for, not taken from an interpolating polynomial.
-  std::optional<Vector> project(double t, const Vector& x_guess, const Predicates& p,
-                                double h_reference);
+  // x_derivative_guess (the polynomial's) predicts the settling steps' motion for Newton.
+  std::optional<Vector> project(double t, const Vector& x_guess, const Vector& x_derivative_guess,
+                                const Predicates& p, double h_reference);
 
   const std::string& failure_reason() const { return failure_reason_; }
   int failure_unknown() const { return failure_unknown_; }
@@ -91,14 +92,15 @@ class Reinitializer {
   double time_resolution(double t) const;
   double settle_step(double t, double h_reference) const;
   // The consistent state at t + 0 the settling steps reach, and the first of them (length h):
-  // where the new motion heads.
+  // where the new motion heads. Newton starts each step from the previous one's state moved by
+  // motion_guess (dx/dt) over the difference of their lengths.
   struct Settled {
     Vector x;
     Vector x_first_step;
     double h;
   };
   std::optional<Settled> settle(double t, const Vector& x_plus, const Vector& q_plus,
-                                const Predicates& p, double h);
+                                const Predicates& p, double h, const Vector& motion_guess);
   std::optional<ConsistentState> consistent_state(double t, const Vector& x_plus,
                                                   const Settled& settled, const Predicates& p);
   bool derivatives_at(double t, const Predicates& p, ConsistentState& state);

@@ -22,18 +22,15 @@ class NewtonMatrix {
   // unknowns replaced by identity rows). False with a reason when the model fails or the matrix
   // is singular.
   enum class Outcome { ok, outside_domain, singular };
-  Outcome factor(double t, const Vector& x, const Predicates& p, double cj);
+  // keep_within > 0: keeps the factorization it holds when that is of mode p and this cj and no
+  // entry of the new matrix differs from the factored one by more than keep_within of it.
+  Outcome factor(double t, const Vector& x, const Predicates& p, double cj, double keep_within = 0);
   // df/dx + shift I: pseudo-transient continuation toward a steady state.
   Outcome factor_shifted(double t, const Vector& x, const Predicates& p, double shift);
   // As factor(), for the blend (1 - lambda) * system(p_from) + lambda * system(p_to) used by the
   // continuation in re-initialization. Leaves load() holding the blended f and q.
   Outcome factor_blend(double t, const Vector& x, const Predicates& p_from, const Predicates& p_to,
                        double lambda, double cj);
-
-  // The last factorization is df/dx + cj dq/dx of mode p (at some x and t).
-  bool factored_for(const Predicates& p, double cj) const {
-    return factored_cj_ == cj && factored_mode_ == p;
-  }
 
   void solve(Vector& b) const { lu_.solve(b); }
   const Load& load() const { return load_; }
@@ -51,6 +48,7 @@ class NewtonMatrix {
   EvalStatus finite_difference_derivatives(double t, const Vector& x, const Predicates& p,
                                            Load& out);
   Outcome factor_loaded();
+  bool holds_factorization_near(const Predicates& p, double cj, double keep_within) const;
 
   System& system_;
   Statistics& statistics_;
@@ -67,7 +65,7 @@ class NewtonMatrix {
   std::vector<std::vector<int>> column_groups_;  // structurally orthogonal columns, for FD
   Vector typical_;
   Predicates factored_mode_;
-  double factored_cj_ = 0;  // 0: no factorization of factor()'s form
+  double factored_cj_ = 0;  // 0: the factorization held is not of factor()'s form
 };
 
 }  // namespace padae

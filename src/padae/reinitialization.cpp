@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "padae/norms.hpp"
 
@@ -18,6 +19,9 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // conditioning is within 1e3 of the integrator's own.
 constexpr double kSettleFraction = 1e-3;
 constexpr double kSettleAccuracy = 1e-2;  // extrapolation error, in units of the error tolerance
+// A kept settling matrix whose entries all stay within this fraction of the matrix at Newton's
+// start contracts as fast as a fresh one would, so a small first correction on it is as telling.
+constexpr double kKeptMatrixDrift = 0.1;
 
 }  // namespace
 
@@ -41,9 +45,14 @@ bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h
                                    double lambda, Vector& x) {
   const double cj = 1 / h;
   const bool blended = lambda < 1;
+  // A kept factorization serves while the matrix at Newton's start is within kKeptMatrixDrift
+  // of it; later refactorizations (slow contraction) are fresh.
+  double keep_within =
+      settling_factorizations_ == SettlingFactorizations::kept && !blended ? kKeptMatrixDrift : 0;
   auto factor = [&]() {
+    const double drift = std::exchange(keep_within, 0.0);
     return blended ? newton.factor_blend(t_eval, x, p_from, p_to, lambda, cj)
-                   : newton.factor(t_eval, x, p_to, cj);
+                   : newton.factor(t_eval, x, p_to, cj, drift);
   };
   auto evaluate = [&]() {
     if (!blended) return newton.evaluate(t_eval, x, p_to) == EvalStatus::ok;
@@ -51,23 +60,9 @@ bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h
   };
 
   double previous_norm = std::numeric_limits<double>::infinity();
-  // Iterating on a factorization kept from an earlier call, until the first refactorization.
-  bool stale = settling_factorizations_ == SettlingFactorizations::kept && !blended &&
-               newton.factored_for(p_to, cj);
-  bool refactor = !stale;
-  const Vector guess = stale ? x : Vector();
-  // A stale matrix can lead the iterate out of the model's domain, or away: Newton starts
-  // again from the guess on a fresh matrix before it gives up.
-  auto start_again_fresh = [&]() {
-    if (!stale) return false;
-    refactor = true;
-    x = guess;
-    previous_norm = std::numeric_limits<double>::infinity();
-    return true;
-  };
+  bool refactor = true;
   for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
     if (refactor) {
-      stale = false;
       auto outcome = factor();
       if (outcome != NewtonMatrix::Outcome::ok) {
         failure_reason_ = outcome == NewtonMatrix::Outcome::singular
@@ -77,7 +72,6 @@ bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h
         return false;
       }
     } else if (!evaluate()) {
-      if (start_again_fresh()) continue;
       failure_reason_ = "the model cannot be evaluated in the new mode";
       return false;
     }
@@ -93,7 +87,6 @@ bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h
     int worst = -1;
     const double norm = weighted_max_norm(delta, inverse_weight, &worst);
     if (!std::isfinite(norm)) {
-      if (start_again_fresh()) continue;
       failure_reason_ = "Newton's method diverges in the new mode";
       failure_unknown_ = worst;
       return false;

@@ -44,9 +44,9 @@ struct ConsistentState {
 
 // Whether each settling step (lengths h, 2h, 4h) keeps its own factorization from one call to
 // the next. Dense output keeps them: its rows follow one another in time and mode, so a matrix
-// factored for an earlier row still makes modified Newton contract fast, and a fresh one is
-// factored only where it does not. Events factor afresh on the caller's matrix: the integration
-// never depends on what was factored before.
+// factored for an earlier row is usually still close to the one at the row's state (it is
+// refactored where it is not, or where modified Newton contracts slowly on it). Events factor
+// afresh on the caller's matrix: the integration never depends on what was factored before.
 enum class SettlingFactorizations { fresh, kept };
 
 class Reinitializer {
@@ -77,8 +77,8 @@ class Reinitializer {
  private:
   // Backward Euler of length h from charges q_start, for the blend of modes
   // (1 - lambda) p_from + lambda p_to, evaluated at t_eval; x holds the guess and the result.
-  // Newton iterates on `newton`, starting from its factorization where that is kept and for
-  // this mode and length.
+  // Newton iterates on `newton`, on the factorization it holds where that is kept and still
+  // close to the matrix at x.
   bool backward_euler(NewtonMatrix& newton, double t_eval, double h, const Vector& q_start,
                       const Vector& held, const Predicates& p_from, const Predicates& p_to,
                       double lambda, Vector& x);

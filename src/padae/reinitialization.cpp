@@ -77,12 +77,14 @@ bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h
     }
     ++statistics_.newton_iterations;
     const Load& load = newton.load();
-    Vector delta = (load.q - q_start) * cj + load.f;
+    Vector& delta = delta_;
+    delta.noalias() = (load.q - q_start) * cj + load.f;
     for (int i : newton.auxiliary_unknowns()) delta[i] = x[i] - held[i];
     newton.solve(delta);
     x -= delta;
     // The tolerance never asks for less than round-off in x.
-    Vector inverse_weight =
+    Vector& inverse_weight = inverse_weight_;
+    inverse_weight.noalias() =
         ((options_.rtol + 100 * kEps) * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
     int worst = -1;
     const double norm = weighted_max_norm(delta, inverse_weight, &worst);

@@ -115,6 +115,7 @@ class Reinitializer {
   std::string failure_reason_;
   int failure_unknown_ = -1;
   std::optional<Vector> stalled_state_;
+  Vector delta_, inverse_weight_;  // backward_euler's, kept so that its iterations do not allocate
 };
 
 }  // namespace padae

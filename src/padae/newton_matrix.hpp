@@ -37,7 +37,7 @@ class NewtonMatrix {
   const Vector& typical() const { return typical_; }
   // |dq/dx| summed into row weights: sum_j |dq_ij/dx_j| * scale_j (zero for algebraic rows).
   void charge_scale(const Vector& scale, Vector& out) const;
-  // Zeroes the entries of v on algebraic rows (no dq/dx at the last derivative evaluation).
+  // Zeroes the entries of v on algebraic rows (no dq/dx in the last factorization).
   void keep_dynamic_rows(Vector& v) const;
   int singular_column() const { return lu_.singular_column(); }
   bool is_auxiliary(int unknown) const { return auxiliary_[unknown]; }
@@ -58,7 +58,7 @@ class NewtonMatrix {
   Load blend_;            // second load for the continuation blend
   Load perturbed_;        // scratch for finite differences
   std::vector<double> matrix_;
-  std::vector<double> abs_dq_dx_;  // |dq/dx| at the last derivative evaluation
+  std::vector<double> abs_dq_dx_;  // |dq/dx| of the last factorization
   std::vector<char> auxiliary_;
   std::vector<int> auxiliary_list_;
   std::vector<int> diagonal_;      // value index of (i, i)

@@ -19,8 +19,11 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // conditioning is within 1e3 of the integrator's own.
 constexpr double kSettleFraction = 1e-3;
 constexpr double kSettleAccuracy = 1e-2;  // extrapolation error, in units of the error tolerance
-// A kept settling matrix whose entries all stay within this fraction of the matrix at Newton's
-// start contracts as fast as a fresh one would, so a small first correction on it is as telling.
+// A kept settling factorization serves while every entry of the matrix at Newton's start is
+// within this fraction of it: modified Newton then contracts about as fast as on a fresh
+// matrix (rate about 0.1 where the matrix is well conditioned), so that a small first
+// correction is as telling. A matrix from another operating point can be far stiffer (a diode
+// that has since turned off): a small correction on it would prove nothing.
 constexpr double kKeptMatrixDrift = 0.1;
 
 }  // namespace
@@ -45,8 +48,7 @@ bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h
                                    double lambda, Vector& x) {
   const double cj = 1 / h;
   const bool blended = lambda < 1;
-  // A kept factorization serves while the matrix at Newton's start is within kKeptMatrixDrift
-  // of it; later refactorizations (slow contraction) are fresh.
+  // Only the first factorization may keep the one held; later ones (slow contraction) are fresh.
   double keep_within =
       settling_factorizations_ == SettlingFactorizations::kept && !blended ? kKeptMatrixDrift : 0;
   auto factor = [&]() {

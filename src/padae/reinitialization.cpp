@@ -200,12 +200,9 @@ double Reinitializer::time_resolution(double t) const {
 }
 
 // The settling steps (up to 4h) stay short of the next source corner: past it the motion is
-// not the one that starts at t. Kept factorizations are for one length each: the length is
-// rounded up to a power of two, so that steps of similar length share it (the curvature test
-// in settle() still holds the extrapolation to its accuracy).
+// not the one that starts at t.
 double Reinitializer::settle_step(double t, double h_reference) const {
-  double h = std::max(kSettleFraction * h_reference, 1e5 * time_resolution(t));
-  if (settling_factorizations_ == SettlingFactorizations::kept) h = std::exp2(std::ceil(std::log2(h)));
+  const double h = std::max(kSettleFraction * h_reference, 1e5 * time_resolution(t));
   return std::min(h, (system_.next_time_event(t) - t) / 8);
 }
 

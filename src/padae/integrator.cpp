@@ -90,7 +90,9 @@ struct Integrator::Impl {
   void update_weights();
   double minimum_step() const;
 
-  Vector interpolate(double t_at) const;
+  // The last step's interpolating polynomial at t_at, or its derivative there.
+  enum class Interpolated { value, derivative };
+  Vector interpolate(double t_at, Interpolated what = Interpolated::value) const;
   double first_step_estimate(double t_at, const Vector& x_at);
 
   // --- events ----------------------------------------------------------------------------
@@ -113,15 +115,17 @@ struct Integrator::Impl {
   Vector absolute_tolerance;
   NewtonMatrix newton;
   Reinitializer reinitializer;
-  // Dense output's own Newton matrix and counters: writing output never changes the
-  // integration (its matrix, its statistics). Made on first use.
+  // Dense output's own Newton matrices and counters: writing output never changes the
+  // integration (its matrix, its statistics). Made on first use. Its settling factorizations
+  // are kept from row to row.
   struct OutputProjection {
     Statistics statistics;
     NewtonMatrix newton;
     Reinitializer reinitializer;
     OutputProjection(System& system, const Options& options, const Vector& absolute_tolerance)
         : newton(system, statistics, absolute_tolerance / options.rtol),
-          reinitializer(system, newton, statistics, options, absolute_tolerance) {}
+          reinitializer(system, newton, statistics, options, absolute_tolerance,
+                        SettlingFactorizations::kept) {}
   };
   std::unique_ptr<OutputProjection> output_projection;
 
@@ -153,7 +157,8 @@ struct Integrator::Impl {
     Predicates p;  // the mode the step was taken in
   } previous_step;
   static Vector evaluate_polynomial(double anchor_at, int order_of, const std::array<Vector, kHistory>& phi,
-                                    const std::array<double, kHistory>& psi_of, double t_at);
+                                    const std::array<double, kHistory>& psi_of, double t_at,
+                                    Interpolated what);
   int order = 1, order_used = 0, constant_steps = 0;
   bool startup_phase = true;
   int steps_since_restart = 0;
@@ -710,22 +715,28 @@ double Integrator::Impl::first_step_estimate(double t_at, const Vector& x_at) {
   return h_first * rate > 0.5 ? 0.5 / rate : h_first;
 }
 
-// IDA's IDAGetSolution: the interpolating polynomial of the last step.
-Vector Integrator::Impl::interpolate(double t_at) const {
+// IDA's IDAGetSolution (IDAGetDky for the derivative): the interpolating polynomial of the
+// last step.
+Vector Integrator::Impl::interpolate(double t_at, Interpolated what) const {
   if (order_used == 0 && previous_step.order > 0)
-    return evaluate_polynomial(previous_step.anchor, previous_step.order, previous_step.phi, previous_step.psi, t_at);
-  return evaluate_polynomial(anchor, order_used, phi_x, psi, t_at);
+    return evaluate_polynomial(previous_step.anchor, previous_step.order, previous_step.phi, previous_step.psi, t_at, what);
+  return evaluate_polynomial(anchor, order_used, phi_x, psi, t_at, what);
 }
 
+// sum_j c_j(t) phi_j, with c_j the product over i < j of (t - anchor + psi_{i-1}) / psi_i
+// (psi_{-1} = 0); the derivative differentiates the products.
 Vector Integrator::Impl::evaluate_polynomial(double anchor_at, int order_of, const std::array<Vector, kHistory>& phi,
-                                             const std::array<double, kHistory>& psi_of, double t_at) {
-  Vector result = phi[0];
+                                             const std::array<double, kHistory>& psi_of, double t_at,
+                                             Interpolated what) {
+  const bool derivative = what == Interpolated::derivative;
+  Vector result = derivative ? Vector::Zero(phi[0].size()) : phi[0];
   double delta_t = t_at - anchor_at;
-  double c = 1, gam = delta_t / psi_of[0];
+  double c = 1, c_derivative = 0, gam = delta_t / psi_of[0];
   for (int j = 1; j <= order_of; ++j) {
+    c_derivative = c_derivative * gam + c / psi_of[j - 1];
     c *= gam;
     gam = (delta_t + psi_of[j - 1]) / psi_of[j];
-    result += c * phi[j];
+    result += (derivative ? c_derivative : c) * phi[j];
   }
   return result;
 }
@@ -827,7 +838,8 @@ Vector Integrator::dense_output(double t_at) {
   if (!s.output_projection)
     s.output_projection = std::make_unique<Impl::OutputProjection>(s.system, s.options, s.absolute_tolerance);
   auto projected = s.output_projection->reinitializer.project(
-      t_at, x_at, previous ? s.previous_step.p : s.p, s.h_used > 0 ? s.h_used : s.h);
+      t_at, x_at, s.interpolate(t_at, Impl::Interpolated::derivative),
+      previous ? s.previous_step.p : s.p, s.h_used > 0 ? s.h_used : s.h);
   return projected ? *projected : x_at;
 }
 

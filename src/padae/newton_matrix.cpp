@@ -123,10 +123,32 @@ EvalStatus NewtonMatrix::finite_difference_derivatives(double t, const Vector& x
 }
 
 NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Predicates& p,
-                                           double cj) {
+                                           double cj, double keep_within) {
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
+  if (keep_within > 0 && holds_factorization_near(p, cj, keep_within)) return Outcome::ok;
   for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
-  return factor_loaded();
+  const Outcome outcome = factor_loaded();
+  if (outcome == Outcome::ok) {
+    factored_mode_ = p;
+    factored_cj_ = cj;
+  }
+  return outcome;
+}
+
+// The factorization held is of mode p and cj, and within keep_within of df/dx + cj dq/dx as
+// loaded now, entry by entry (auxiliary rows are identity rows in both).
+bool NewtonMatrix::holds_factorization_near(const Predicates& p, double cj,
+                                            double keep_within) const {
+  if (factored_cj_ != cj || factored_mode_ != p) return false;
+  const auto& starts = pattern_.column_starts();
+  const auto& rows = pattern_.row_indices();
+  for (int column = 0; column < pattern_.size(); ++column)
+    for (int k = starts[column]; k < starts[column + 1]; ++k) {
+      if (auxiliary_[rows[k]]) continue;
+      const double now = load_.df_dx[k] + cj * load_.dq_dx[k];
+      if (!(std::abs(now - matrix_[k]) <= keep_within * std::abs(matrix_[k]))) return false;
+    }
+  return true;
 }
 
 NewtonMatrix::Outcome NewtonMatrix::factor_shifted(double t, const Vector& x, const Predicates& p,
@@ -156,6 +178,7 @@ NewtonMatrix::Outcome NewtonMatrix::factor_blend(double t, const Vector& x,
 }
 
 NewtonMatrix::Outcome NewtonMatrix::factor_loaded() {
+  factored_cj_ = 0;
   for (std::size_t k = 0; k < matrix_.size(); ++k) abs_dq_dx_[k] = std::abs(load_.dq_dx[k]);
   // Auxiliary unknowns are held: their rows become x_i = held value.
   if (!auxiliary_list_.empty()) {

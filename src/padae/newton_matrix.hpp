@@ -22,7 +22,9 @@ class NewtonMatrix {
   // unknowns replaced by identity rows). False with a reason when the model fails or the matrix
   // is singular.
   enum class Outcome { ok, outside_domain, singular };
-  Outcome factor(double t, const Vector& x, const Predicates& p, double cj);
+  // keep_within > 0: keeps the factorization it holds when that is of mode p and this cj and no
+  // entry of the new matrix differs from the factored one by more than keep_within of it.
+  Outcome factor(double t, const Vector& x, const Predicates& p, double cj, double keep_within = 0);
   // df/dx + shift I: pseudo-transient continuation toward a steady state.
   Outcome factor_shifted(double t, const Vector& x, const Predicates& p, double shift);
   // As factor(), for the blend (1 - lambda) * system(p_from) + lambda * system(p_to) used by the
@@ -32,9 +34,10 @@ class NewtonMatrix {
 
   void solve(Vector& b) const { lu_.solve(b); }
   const Load& load() const { return load_; }
+  const Vector& typical() const { return typical_; }
   // |dq/dx| summed into row weights: sum_j |dq_ij/dx_j| * scale_j (zero for algebraic rows).
   void charge_scale(const Vector& scale, Vector& out) const;
-  // Zeroes the entries of v on algebraic rows (no dq/dx at the last derivative evaluation).
+  // Zeroes the entries of v on algebraic rows (no dq/dx in the last factorization).
   void keep_dynamic_rows(Vector& v) const;
   int singular_column() const { return lu_.singular_column(); }
   bool is_auxiliary(int unknown) const { return auxiliary_[unknown]; }
@@ -45,6 +48,7 @@ class NewtonMatrix {
   EvalStatus finite_difference_derivatives(double t, const Vector& x, const Predicates& p,
                                            Load& out);
   Outcome factor_loaded();
+  bool holds_factorization_near(const Predicates& p, double cj, double keep_within) const;
 
   System& system_;
   Statistics& statistics_;
@@ -54,12 +58,14 @@ class NewtonMatrix {
   Load blend_;            // second load for the continuation blend
   Load perturbed_;        // scratch for finite differences
   std::vector<double> matrix_;
-  std::vector<double> abs_dq_dx_;  // |dq/dx| at the last derivative evaluation
+  std::vector<double> abs_dq_dx_;  // |dq/dx| of the last factorization
   std::vector<char> auxiliary_;
   std::vector<int> auxiliary_list_;
   std::vector<int> diagonal_;      // value index of (i, i)
   std::vector<std::vector<int>> column_groups_;  // structurally orthogonal columns, for FD
   Vector typical_;
+  Predicates factored_mode_;
+  double factored_cj_ = 0;  // 0: the factorization held is not of factor()'s form
 };
 
 }  // namespace padae

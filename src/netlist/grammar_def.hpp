@@ -346,7 +346,8 @@ x3::rule<class unsigned_number_id, ExpressionPtr> const unsigned_number = "a num
 x3::rule<class value_id, ExpressionPtr> const value = "a value";
 x3::rule<class end_id> const end_of_card = "end of card";
 
-auto const name_def = x3::raw[lexeme[+name_char]][make_word];
+// A lone '$' starts an inline comment (lines.cpp), so it is no name: printed back, it would be one.
+auto const name_def = x3::raw[lexeme[!(lit('$') >> !name_char) >> +name_char]][make_word];
 auto const node_def = name_def;
 auto const element_name_def = name_def;
 auto const model_name_def = name_def;

@@ -468,6 +468,24 @@ def work_precision_circuit(args, log, c):
 # ----------------------------------------------------------------------------------------------
 # Scaling
 
+def scaling_measurement(args, sim, path, probe, wd, read_first):
+    """One simulator on one scaling netlist: (the first run or None, its row entry). Only quick
+    runs are repeated (median of args.repeats); the first reads its waveform when asked."""
+    def run(read):
+        if sim == "padsim":
+            return run_padsim(args.padsim, path, [probe], wd, "padsim", read=read, timeout=args.timeout)
+        return run_ngspice(path, [probe], wd, "ngspice", save=True, read=read, timeout=args.timeout)
+    try:
+        first = run(read_first)
+        times = [first.seconds]
+        if first.seconds < 5:
+            times += [run(False).seconds for _ in range(args.repeats - 1)]
+    except sc.SimulationFailure as e:
+        return None, {"failure": str(e)[:400]}
+    return first, {"seconds": rl.median(times), "runs": len(times), "steps": first.steps,
+                   "peak_mb": first.peak_mb, "internal_seconds": first.internal_seconds}
+
+
 def scaling(args, log):
     sys.path.insert(0, os.path.join(ROOT, "circuits"))
     import gen_rc_ladder  # noqa: E402
@@ -483,24 +501,10 @@ def scaling(args, log):
         row = {"sections": n}
         for sim in ("padsim", "ngspice"):
             log("scaling: ladder %d, %s" % (n, sim))
-
-            def run(read, sim=sim):
-                if sim == "padsim":
-                    return run_padsim(args.padsim, path, ["v(n1)"], wd, "padsim", read=read, timeout=args.timeout)
-                return run_ngspice(path, ["v(n1)"], wd, "ngspice", save=True, read=read, timeout=args.timeout)
-            try:
-                first = run(True)
-                # Repeat (median of 3) only the runs that are quick.
-                times = [first.seconds]
-                if first.seconds < 5:
-                    times += [run(False).seconds for _ in range(args.repeats - 1)]
-                row[sim] = {"seconds": rl.median(times), "runs": len(times), "steps": first.steps,
-                            "peak_mb": first.peak_mb, "internal_seconds": first.internal_seconds}
-                if sim == "padsim":
-                    row["unknowns"] = first.stats.get("unknowns")
-                    row[sim]["events"] = first.stats.get("events")
-            except sc.SimulationFailure as e:
-                row[sim] = {"failure": str(e)[:400]}
+            first, row[sim] = scaling_measurement(args, sim, path, "v(n1)", wd, read_first=True)
+            if sim == "padsim" and first:
+                row["unknowns"] = first.stats.get("unknowns")
+                row[sim]["events"] = first.stats.get("events")
         out["ladders"].append(row)
     buck = os.path.join(ROOT, "circuits", "buck.cir")
     for periods in args.periods:
@@ -509,20 +513,7 @@ def scaling(args, log):
         row = {"periods": periods}
         for sim in ("padsim", "ngspice"):
             log("scaling: buck %d periods, %s" % (periods, sim))
-
-            def run(read, sim=sim):
-                if sim == "padsim":
-                    return run_padsim(args.padsim, path, ["v(out)"], wd, "padsim", read=read, timeout=args.timeout)
-                return run_ngspice(path, ["v(out)"], wd, "ngspice", save=True, read=read, timeout=args.timeout)
-            try:
-                first = run(False)
-                times = [first.seconds]
-                if first.seconds < 5:
-                    times += [run(False).seconds for _ in range(args.repeats - 1)]
-                row[sim] = {"seconds": rl.median(times), "runs": len(times), "steps": first.steps,
-                            "peak_mb": first.peak_mb, "internal_seconds": first.internal_seconds}
-            except sc.SimulationFailure as e:
-                row[sim] = {"failure": str(e)[:400]}
+            _, row[sim] = scaling_measurement(args, sim, path, "v(out)", wd, read_first=False)
         out["periods"].append(row)
     return out
 

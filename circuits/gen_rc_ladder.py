@@ -31,7 +31,7 @@ def ladder(n, switch_every=10, ideal=False):
     for k in range(switch_every, n + 1, switch_every):
         switches += 1
         lines.append("S%d n%d n%d clk%d 0 ladsw" % (k, k - 1, k, switches % 7))
-    for phase in range(min(7, switches)):
+    for phase in sorted({k % 7 for k in range(1, switches + 1)}):  # the clocks the switches use
         lines.append("Vclk%d clk%d 0 PULSE(0 1 %.3gu 1n 1n 1u 2u)" % (phase, phase, 0.3 * phase + 0.5))
     lines.append(".model ladsw SW(vt=0.5 vh=0 ron=%s roff=1e9)" % ("0" if ideal else "1"))
     tstop = max(5e-6, min(1e-3, 2e-9 * n * n / 10))

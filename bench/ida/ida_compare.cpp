@@ -461,7 +461,7 @@ std::vector<Problem> problems() {
   std::vector<Problem> list;
   using padae::testing::Escapement;
   using padae::testing::EscapementModel;
-  using padae::testing::gauss_legendre;
+  using padae::testing::PendulumClosedForm;
   using padae::testing::Masses;
   using padae::testing::MassesClosedForm;
   using padae::testing::Pendulum;
@@ -556,25 +556,12 @@ std::vector<Problem> problems() {
   {
     static const Pendulum pendulum;
     const double phi0 = 0.1, omega0 = 0.5;
-    const double phi_wall = std::asin(pendulum.wall);
-    auto speed = [=](double phi) {
-      return std::sqrt(omega0 * omega0 + 2 * pendulum.c * (std::cos(phi0) - std::cos(phi)));
-    };
+    const PendulumClosedForm closed_form{pendulum, phi0, omega0, 256};
     static std::vector<double> times, speeds;
-    times.assign(1, gauss_legendre([&](double phi) { return 1 / speed(phi); }, phi0, phi_wall, 256));
-    speeds.assign(1, speed(phi_wall));
-    auto flight = [&](double s) {
-      double leave = pendulum.restitution * s;
-      double phi_turn = std::acos(std::cos(phi_wall) + leave * leave / (2 * pendulum.c));
-      auto integrand = [&](double u) {
-        if (u == 0) return 2 / std::sqrt(2 * pendulum.c * std::sin(phi_turn));
-        double drop = 2 * std::sin(phi_turn + 0.5 * u * u) * std::sin(0.5 * u * u);
-        return 2 * u / std::sqrt(2 * pendulum.c * drop);
-      };
-      return 2 * gauss_legendre(integrand, 0.0, std::sqrt(phi_wall - phi_turn), 256);
-    };
+    times.assign(1, closed_form.first_impact_time());
+    speeds.assign(1, closed_form.first_impact_speed());
     for (int i = 1; i < 7; ++i) {
-      times.push_back(times.back() + flight(speeds.back()));
+      times.push_back(times.back() + closed_form.flight(speeds.back()));
       speeds.push_back(pendulum.restitution * speeds.back());
     }
     const double t_end = 0.5 * (times[5] + times[6]);

@@ -17,7 +17,7 @@ namespace {
 
 using testing::Escapement;
 using testing::EscapementModel;
-using testing::gauss_legendre;
+using testing::PendulumClosedForm;
 using testing::Pendulum;
 using testing::PendulumModel;
 using testing::run_until;
@@ -119,29 +119,12 @@ TEST(PaperExample7, EscapementCountsKicksAndSettlesOnTheLimitCycle) {
 TEST(PaperExample10, PendulumImpactsFollowTheQuadratureAndAccumulationIsDiagnosed) {
   Pendulum pendulum;
   const double phi0 = 0.1, omega0 = 0.5;
-  const double phi_wall = std::asin(pendulum.wall);
-  // Energy: omega^2 / 2 + C cos(phi) is conserved between impacts.
-  auto speed = [&](double phi) {
-    return std::sqrt(omega0 * omega0 + 2 * pendulum.c * (std::cos(phi0) - std::cos(phi)));
-  };
-  std::vector<double> impact_times{gauss_legendre([&](double phi) { return 1 / speed(phi); }, phi0, phi_wall, 64)};
-  std::vector<double> impact_speeds{speed(phi_wall)};
-  // After an impact at speed s the rod leaves at k s, turns at phi_t and returns at speed k s:
-  // flight time 2 int_{phi_t}^{phi_wall} dphi / omega, with phi = phi_t + u^2 removing the
-  // turning point's square-root singularity.
-  auto flight = [&](double s) {
-    double leave = pendulum.restitution * s;
-    double phi_turn = std::acos(std::cos(phi_wall) + leave * leave / (2 * pendulum.c));
-    auto integrand = [&](double u) {
-      if (u == 0) return 2 / std::sqrt(2 * pendulum.c * std::sin(phi_turn));
-      double drop = 2 * std::sin(phi_turn + 0.5 * u * u) * std::sin(0.5 * u * u);
-      return 2 * u / std::sqrt(2 * pendulum.c * drop);
-    };
-    return 2 * gauss_legendre(integrand, 0.0, std::sqrt(phi_wall - phi_turn), 64);
-  };
+  const PendulumClosedForm closed_form{pendulum, phi0, omega0, 64};
+  std::vector<double> impact_times{closed_form.first_impact_time()};
+  std::vector<double> impact_speeds{closed_form.first_impact_speed()};
   double t_accumulation = impact_times[0];
   for (double s = impact_speeds[0]; s > 1e-30; s *= pendulum.restitution) {
-    double dt = flight(s);
+    double dt = closed_form.flight(s);
     t_accumulation += dt;
     if (impact_times.size() < 8) {
       impact_times.push_back(impact_times.back() + dt);

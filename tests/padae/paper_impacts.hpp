@@ -94,4 +94,34 @@ double gauss_legendre(F f, double a, double b, int panels) {
   return sum;
 }
 
+// The pendulum's closed form by quadrature, from phi0 and omega0 (Gauss-Legendre on `panels`).
+struct PendulumClosedForm {
+  Pendulum pendulum;
+  double phi0, omega0;
+  int panels;
+
+  double phi_wall() const { return std::asin(pendulum.wall); }
+  // Energy: omega^2 / 2 + C cos(phi) is conserved between impacts.
+  double speed(double phi) const {
+    return std::sqrt(omega0 * omega0 + 2 * pendulum.c * (std::cos(phi0) - std::cos(phi)));
+  }
+  double first_impact_time() const {
+    return gauss_legendre([&](double phi) { return 1 / speed(phi); }, phi0, phi_wall(), panels);
+  }
+  double first_impact_speed() const { return speed(phi_wall()); }
+  // After an impact at speed s the rod leaves at k s, turns at phi_t and returns at speed k s:
+  // flight time 2 int_{phi_t}^{phi_wall} dphi / omega, with phi = phi_t + u^2 removing the
+  // turning point's square-root singularity.
+  double flight(double s) const {
+    const double c = pendulum.c, leave = pendulum.restitution * s;
+    const double phi_turn = std::acos(std::cos(phi_wall()) + leave * leave / (2 * c));
+    auto integrand = [&](double u) {
+      if (u == 0) return 2 / std::sqrt(2 * c * std::sin(phi_turn));
+      double drop = 2 * std::sin(phi_turn + 0.5 * u * u) * std::sin(0.5 * u * u);
+      return 2 * u / std::sqrt(2 * c * drop);
+    };
+    return 2 * gauss_legendre(integrand, 0.0, std::sqrt(phi_wall() - phi_turn), panels);
+  }
+};
+
 }  // namespace padae::testing

@@ -272,18 +272,21 @@ def display_command(command, workdir, cwd):
 
 # --- stiff ----------------------------------------------------------------------------------------
 
-def tolerance_runs(c):
-    """The runs of a smooth case: padsim's defaults (rtol 1e-3) and rtol 1e-6."""
-    return [("default", 1e-3, []), ("rtol 1e-6", 1e-6, ["--rtol", "1e-6"])]
+def tolerance_runs(c, extra=(), events=False):
+    """The runs of a smooth case, padsim's defaults (rtol 1e-3) and rtol 1e-6, each with the
+    arguments `extra`: (label, rtol, tolerance arguments, run) for each run that succeeds; a run
+    that fails is recorded as a failed criterion."""
+    for label, rtol, args in (("default", 1e-3, []), ("rtol 1e-6", 1e-6, ["--rtol", "1e-6"])):
+        r = c.run(args=list(extra) + args, tag=label.replace(" ", "_"), events=events)
+        if not c.expect(r.returncode == 0, f"{label}: the run succeeds ({describe_status(r.returncode)})"):
+            c.figure(f"{label}: {r.error_text()}")
+            continue
+        yield label, rtol, args, r
 
 
 def check_lag_columns(c, columns, scale_relative=False):
     """columns: {probe: (exact function, size)}; each run's error must be within 10 rtol x size."""
-    for label, rtol, args in tolerance_runs(c):
-        r = c.run(args=args, tag=label.replace(" ", "_"))
-        if not c.expect(r.returncode == 0, f"{label}: the run succeeds ({describe_status(r.returncode)})"):
-            c.figure(f"{label}: {r.error_text()}")
-            continue
+    for label, rtol, args, r in tolerance_runs(c):
         worst = None
         for probe, (exact, size) in columns.items():
             err, at = max_error(r, probe, exact)
@@ -335,12 +338,7 @@ def switch_waveform(t, transitions, c_farad=1e-6, r=1e3, ron=1e-3, roff=1e12, vi
 
 def case_switch_ron_roff_1e15(c):
     transitions = [1e-3 + 0.5e-9, 2e-3 + 1.5e-9, 3e-3 + 0.5e-9, 4e-3 + 1.5e-9]
-    for label, rtol, args in tolerance_runs(c):
-        tag = label.replace(" ", "_")
-        r = c.run(args=args, tag=tag, events=True)
-        if not c.expect(r.returncode == 0, f"{label}: the run succeeds ({describe_status(r.returncode)})"):
-            c.figure(f"{label}: {r.error_text()}")
-            continue
+    for label, rtol, args, r in tolerance_runs(c, events=True):
         times = [e["time"] for e in r.events]
         c.expect(len(times) == 4, f"{label}: 4 switching events ({len(times)})")
         if len(times) == 4:
@@ -500,12 +498,7 @@ def freewheel_closed_form():
 
 def case_diode_freewheel_to_zero(c):
     exact, t_open, t_zero = freewheel_closed_form()
-    for label, rtol, args in tolerance_runs(c):
-        tag = label.replace(" ", "_")
-        r = c.run(args=["--probe", "i(l1),v(out),v(a)"] + args, tag=tag, events=True)
-        if not c.expect(r.returncode == 0, f"{label}: the run succeeds ({describe_status(r.returncode)})"):
-            c.figure(f"{label}: {r.error_text()}")
-            continue
+    for label, rtol, args, r in tolerance_runs(c, extra=["--probe", "i(l1),v(out),v(a)"], events=True):
         flips = [(e["element"], e["from"], e["to"]) for e in r.events]
         c.expect(flips == [("s1", "1", "0"), ("d1", "0", "1"), ("d1", "1", "0")],
                  f"{label}: three flips: s1 off and d1 on together, then d1 off ({len(flips)} flips)")
@@ -765,11 +758,7 @@ def case_events_closer_than_min_step(c):
 
 
 def case_source_jump_fast_rc(c):
-    for label, rtol, args in tolerance_runs(c):
-        r = c.run(args=args, tag=label.replace(" ", "_"))
-        if not c.expect(r.returncode == 0, f"{label}: the run succeeds ({describe_status(r.returncode)})"):
-            c.figure(f"{label}: {r.error_text()}")
-            continue
+    for label, rtol, args, r in tolerance_runs(c):
         err, at = max_error(r, "v(n1)", lambda t: lag_response([1e-9], t, 1e-6, 0), keep=lambda t: t != 1e-6)
         c.expect(err <= 10 * rtol, f"{label}: v(n1) max error {g(err)} V (at {g(at)} s) <= 10 rtol x 1 V")
         c.stats_figure(r, f"{label}: ")
@@ -780,12 +769,7 @@ def case_source_jump_fast_rc(c):
 def case_log_negative_off_path(c):
     exact = lambda t: math.log(max(math.sin(2 * math.pi * 1e3 * t), 1e-3))
     swing = -math.log(1e-3)
-    for label, rtol, args in tolerance_runs(c):
-        tag = label.replace(" ", "_")
-        r = c.run(args=args, tag=tag, events=True)
-        if not c.expect(r.returncode == 0, f"{label}: the run succeeds ({describe_status(r.returncode)})"):
-            c.figure(f"{label}: {r.error_text()}")
-            continue
+    for label, rtol, args, r in tolerance_runs(c, events=True):
         s = r.stats or {}
         c.expect(s.get("rejected_domain", 0) >= 1, f"{label}: steps cut outside the domain: {s.get('rejected_domain')}",
                  key=not args)

@@ -195,8 +195,7 @@ TEST(Events, ACircuitPaysOnlyForWhatItUses) {
 
 // x'' = -x for x > 0 and x'' = -4 x for x < 0: half periods of pi and pi/2, and |x'| = 1 at
 // every crossing of x = 0 (the potential is zero there on both sides). Started at x = sin 0.5,
-// x' = cos 0.5, the n-th crossing is at pi - 0.5 + (n - 1) 3 pi / 4 ... alternately: downward
-// crossings at pi - 0.5 + k 3pi/2, upward ones pi/2 later.
+// x' = cos 0.5: downward crossings at pi - 0.5 + k 3pi/2, upward ones pi/2 later.
 class StiffeningOscillator : public SemiExplicitSystem {
  public:
   StiffeningOscillator() : SemiExplicitSystem({D, D}) {}

@@ -21,6 +21,7 @@
 #include <optional>
 #include <sstream>
 
+#include "padae/dense_output.hpp"
 #include "padae/newton_matrix.hpp"
 #include "padae/norms.hpp"
 #include "padae/reinitialization.hpp"
@@ -90,9 +91,10 @@ struct Integrator::Impl {
   void update_weights();
   double minimum_step() const;
 
-  // The last step's interpolating polynomial at t_at, or its derivative there.
+  // The last step's interpolating polynomial of x or of q at t_at, or its derivative there.
   enum class Interpolated { value, derivative };
-  Vector interpolate(double t_at, Interpolated what = Interpolated::value) const;
+  enum class Quantity { x, q };
+  Vector interpolate(double t_at, Interpolated what = Interpolated::value, Quantity of = Quantity::x) const;
   double first_step_estimate(double t_at, const Vector& x_at);
 
   // --- events ----------------------------------------------------------------------------
@@ -115,19 +117,7 @@ struct Integrator::Impl {
   Vector absolute_tolerance;
   NewtonMatrix newton;
   Reinitializer reinitializer;
-  // Dense output's own Newton matrices and counters: writing output never changes the
-  // integration (its matrix, its statistics). Made on first use. Its settling factorizations
-  // are kept from row to row.
-  struct OutputProjection {
-    Statistics statistics;
-    NewtonMatrix newton;
-    Reinitializer reinitializer;
-    OutputProjection(System& system, const Options& options, const Vector& absolute_tolerance)
-        : newton(system, statistics, absolute_tolerance / options.rtol),
-          reinitializer(system, newton, statistics, options, absolute_tolerance,
-                        SettlingFactorizations::kept) {}
-  };
-  std::unique_ptr<OutputProjection> output_projection;
+  std::unique_ptr<DenseOutput> dense_output;  // made on first use
 
   // The solution.
   double t = 0;
@@ -147,15 +137,17 @@ struct Integrator::Impl {
   std::array<Vector, kHistory> phi_x, phi_q;
   std::array<double, kHistory> psi{}, alpha{}, beta{}, sigma{}, gamma{};
   double anchor = 0;  // the time phi_x[0] belongs to
-  // The last step's interpolating polynomial, kept across a restart: output inside a step that
+  // The last step's interpolating polynomials, kept across a restart: output inside a step that
   // ended at an event or a source corner is still interpolated.
   struct Polynomial {
     double anchor = 0;
     int order = 0;
-    std::array<Vector, kHistory> phi;
+    std::array<Vector, kHistory> phi_x, phi_q;
     std::array<double, kHistory> psi{};
+    double h = 0;  // the step's length
     Predicates p;  // the mode the step was taken in
   } previous_step;
+  bool after_restart() const { return order_used == 0 && previous_step.order > 0; }
   static Vector evaluate_polynomial(double anchor_at, int order_of, const std::array<Vector, kHistory>& phi,
                                     const std::array<double, kHistory>& psi_of, double t_at,
                                     Interpolated what);
@@ -717,10 +709,12 @@ double Integrator::Impl::first_step_estimate(double t_at, const Vector& x_at) {
 
 // IDA's IDAGetSolution (IDAGetDky for the derivative): the interpolating polynomial of the
 // last step.
-Vector Integrator::Impl::interpolate(double t_at, Interpolated what) const {
-  if (order_used == 0 && previous_step.order > 0)
-    return evaluate_polynomial(previous_step.anchor, previous_step.order, previous_step.phi, previous_step.psi, t_at, what);
-  return evaluate_polynomial(anchor, order_used, phi_x, psi, t_at, what);
+Vector Integrator::Impl::interpolate(double t_at, Interpolated what, Quantity of) const {
+  const bool of_x = of == Quantity::x;
+  if (after_restart())
+    return evaluate_polynomial(previous_step.anchor, previous_step.order,
+                               of_x ? previous_step.phi_x : previous_step.phi_q, previous_step.psi, t_at, what);
+  return evaluate_polynomial(anchor, order_used, of_x ? phi_x : phi_q, psi, t_at, what);
 }
 
 // sum_j c_j(t) phi_j, with c_j the product over i < j of (t - anchor + psi_{i-1}) / psi_i
@@ -743,7 +737,7 @@ Vector Integrator::Impl::evaluate_polynomial(double anchor_at, int order_of, con
 
 // Order 1 from a consistent state, as after the initial point (IDA's first step).
 void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
-  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, psi, step_predicates};
+  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, phi_q, psi, h_used, step_predicates};
   anchor = t_at;
   t = t_at;
   x = consistent.x;
@@ -833,14 +827,16 @@ const Statistics& Integrator::statistics() const { return impl_->statistics; }
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
 Vector Integrator::dense_output(double t_at) {
   Impl& s = *impl_;
+  using Interpolated = Impl::Interpolated;
+  using Quantity = Impl::Quantity;
   Vector x_at = s.interpolate(t_at);
-  const bool previous = s.order_used == 0 && s.previous_step.order > 0;
-  if (!s.output_projection)
-    s.output_projection = std::make_unique<Impl::OutputProjection>(s.system, s.options, s.absolute_tolerance);
-  auto projected = s.output_projection->reinitializer.project(
-      t_at, x_at, s.interpolate(t_at, Impl::Interpolated::derivative),
-      previous ? s.previous_step.p : s.p, s.h_used > 0 ? s.h_used : s.h);
-  return projected ? *projected : x_at;
+  if (!s.dense_output) s.dense_output = std::make_unique<DenseOutput>(s.system, s.options, s.absolute_tolerance);
+  const bool previous = s.after_restart();
+  auto solved = s.dense_output->solve(t_at, x_at, s.interpolate(t_at, Interpolated::value, Quantity::q),
+                                      s.interpolate(t_at, Interpolated::derivative, Quantity::q),
+                                      previous ? s.previous_step.p : s.step_predicates,
+                                      previous ? s.previous_step.h : s.h_used);
+  return solved ? *solved : x_at;
 }
 
 }  // namespace padae

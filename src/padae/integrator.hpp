@@ -130,9 +130,10 @@ class Integrator {
   double step_size() const;               // size of the last step
   // Dense output: x(t) for t inside the last step, from its interpolating polynomial.
   Vector interpolate(double t) const;
-  // Dense output for writing: the interpolated charges, with the unknowns the error test does
-  // not control (algebraic ones, hidden algebraic directions) made consistent with them. Falls
-  // back to the interpolating polynomial where that fails.
+  // Dense output for writing: the step's corrector equation solved at t with the polynomial as
+  // predictor (dense_output.hpp), so that the unknowns the error test does not control
+  // (algebraic ones, hidden algebraic directions) are consistent. Falls back to the
+  // interpolating polynomial where Newton fails.
   Vector dense_output(double t);
 
   const EventRecord& last_event() const;

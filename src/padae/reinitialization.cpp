@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <limits>
-#include <utility>
 
 #include "padae/norms.hpp"
 
@@ -19,46 +18,29 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // conditioning is within 1e3 of the integrator's own.
 constexpr double kSettleFraction = 1e-3;
 constexpr double kSettleAccuracy = 1e-2;  // extrapolation error, in units of the error tolerance
-// A kept settling factorization serves while every entry of the matrix at Newton's start is
-// within this fraction of it: modified Newton then contracts about as fast as on a fresh
-// matrix (rate about 0.1 where the matrix is well conditioned), so that a small first
-// correction is as telling. A matrix from another operating point can be far stiffer (a diode
-// that has since turned off): a small correction on it would prove nothing.
-constexpr double kKeptMatrixDrift = 0.1;
 
 }  // namespace
 
 Reinitializer::Reinitializer(System& system, NewtonMatrix& newton, Statistics& statistics,
-                             const Options& options, const Vector& absolute_tolerance,
-                             SettlingFactorizations settling_factorizations)
+                             const Options& options, const Vector& absolute_tolerance)
     : system_(system),
       newton_(newton),
       statistics_(statistics),
       options_(options),
-      absolute_tolerance_(absolute_tolerance),
-      settling_factorizations_(settling_factorizations) {
-  if (settling_factorizations == SettlingFactorizations::kept)
-    for (auto& matrix : kept_settling_matrices_)
-      matrix = std::make_unique<NewtonMatrix>(system, statistics, newton.typical());
-}
+      absolute_tolerance_(absolute_tolerance) {}
 
-bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h,
-                                   const Vector& q_start, const Vector& held,
-                                   const Predicates& p_from, const Predicates& p_to,
-                                   double lambda, Vector& x) {
+bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_start,
+                                   const Vector& held, const Predicates& p_from,
+                                   const Predicates& p_to, double lambda, Vector& x) {
   const double cj = 1 / h;
   const bool blended = lambda < 1;
-  // Only the first factorization may keep the one held; later ones (slow contraction) are fresh.
-  double keep_within =
-      settling_factorizations_ == SettlingFactorizations::kept && !blended ? kKeptMatrixDrift : 0;
   auto factor = [&]() {
-    const double drift = std::exchange(keep_within, 0.0);
-    return blended ? newton.factor_blend(t_eval, x, p_from, p_to, lambda, cj)
-                   : newton.factor(t_eval, x, p_to, cj, drift);
+    return blended ? newton_.factor_blend(t_eval, x, p_from, p_to, lambda, cj)
+                   : newton_.factor(t_eval, x, p_to, cj);
   };
   auto evaluate = [&]() {
-    if (!blended) return newton.evaluate(t_eval, x, p_to) == EvalStatus::ok;
-    return newton.factor_blend(t_eval, x, p_from, p_to, lambda, cj) == NewtonMatrix::Outcome::ok;
+    if (!blended) return newton_.evaluate(t_eval, x, p_to) == EvalStatus::ok;
+    return newton_.factor_blend(t_eval, x, p_from, p_to, lambda, cj) == NewtonMatrix::Outcome::ok;
   };
 
   double previous_norm = std::numeric_limits<double>::infinity();
@@ -70,7 +52,7 @@ bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h
         failure_reason_ = outcome == NewtonMatrix::Outcome::singular
                               ? "the circuit equations are singular in the new mode"
                               : "the model cannot be evaluated in the new mode";
-        failure_unknown_ = outcome == NewtonMatrix::Outcome::singular ? newton.singular_column() : -1;
+        failure_unknown_ = outcome == NewtonMatrix::Outcome::singular ? newton_.singular_column() : -1;
         return false;
       }
     } else if (!evaluate()) {
@@ -78,15 +60,13 @@ bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h
       return false;
     }
     ++statistics_.newton_iterations;
-    const Load& load = newton.load();
-    Vector& delta = delta_;
-    delta.noalias() = (load.q - q_start) * cj + load.f;
-    for (int i : newton.auxiliary_unknowns()) delta[i] = x[i] - held[i];
-    newton.solve(delta);
+    const Load& load = newton_.load();
+    Vector delta = (load.q - q_start) * cj + load.f;
+    for (int i : newton_.auxiliary_unknowns()) delta[i] = x[i] - held[i];
+    newton_.solve(delta);
     x -= delta;
     // The tolerance never asks for less than round-off in x.
-    Vector& inverse_weight = inverse_weight_;
-    inverse_weight.noalias() =
+    Vector inverse_weight =
         ((options_.rtol + 100 * kEps) * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
     int worst = -1;
     const double norm = weighted_max_norm(delta, inverse_weight, &worst);
@@ -108,22 +88,22 @@ bool Reinitializer::backward_euler(NewtonMatrix& newton, double t_eval, double h
   return false;
 }
 
-bool Reinitializer::backward_euler_with_continuation(NewtonMatrix& newton, double t_eval,
-                                                     double h, const Vector& q_start,
+bool Reinitializer::backward_euler_with_continuation(double t_eval, double h,
+                                                     const Vector& q_start,
                                                      const Predicates& p_from,
                                                      const Predicates& p_to, Vector& x) {
   const Vector guess = x;
-  if (backward_euler(newton, t_eval, h, q_start, guess, p_from, p_to, 1.0, x)) return true;
+  if (backward_euler(t_eval, h, q_start, guess, p_from, p_to, 1.0, x)) return true;
   if (p_from == p_to) return false;
   // Continuation in a parameter (the paper's remedy): from the old mode, whose solution is
   // near x, to the new one.
   x = guess;
-  if (!backward_euler(newton, t_eval, h, q_start, guess, p_from, p_to, 0.0, x)) return false;
+  if (!backward_euler(t_eval, h, q_start, guess, p_from, p_to, 0.0, x)) return false;
   double lambda = 0, increment = 0.25;
   while (lambda < 1) {
     double next = std::min(1.0, lambda + increment);
     Vector trial = x;
-    if (backward_euler(newton, t_eval, h, q_start, guess, p_from, p_to, next, trial)) {
+    if (backward_euler(t_eval, h, q_start, guess, p_from, p_to, next, trial)) {
       x = trial;
       lambda = next;
       increment = std::min(2 * increment, 1.0);
@@ -162,8 +142,8 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
     for (h_impulse = h_vanishing;; h_impulse = std::min(1e3 * h_impulse, h_settle)) {
       x_plus = x_start;
       bool solved = continuation
-                        ? backward_euler_with_continuation(newton_, t + h_impulse, h_impulse, q_before, p_from, p_to, x_plus)
-                        : backward_euler(newton_, t + h_impulse, h_impulse, q_before, x_start, p_from, p_to, 1.0, x_plus);
+                        ? backward_euler_with_continuation(t + h_impulse, h_impulse, q_before, p_from, p_to, x_plus)
+                        : backward_euler(t + h_impulse, h_impulse, q_before, x_start, p_from, p_to, 1.0, x_plus);
       if (solved) break;
       if (h_impulse >= h_settle) {
         h_impulse = 0;
@@ -178,10 +158,7 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
     return std::nullopt;
   }
   const Vector q_plus = newton_.load().q;
-  // The new mode's motion is not known before its first settling step.
-  auto settled = settle(t, x_plus, q_plus, p_to, h_settle, Vector::Zero(system_.size()));
-  if (!settled) return std::nullopt;
-  auto consistent = consistent_state(t, x_plus, *settled, p_to);
+  auto consistent = settle(t, x_plus, q_plus, p_to, h_settle);
   if (!consistent) return consistent;
   consistent->impulse = h_impulse * x_plus;
   // A jump moves q by far more than the smooth motion does over the impulse step.
@@ -212,10 +189,9 @@ double Reinitializer::settle_step(double t, double h_reference) const {
 // steps stay well conditioned. A mode faster than the steps (a switch's RC of a nanosecond
 // against microsecond steps) is not polynomial over them: the difference between the quadratic
 // and the linear extrapolation shows it, and h is shortened until it is resolved.
-std::optional<Reinitializer::Settled> Reinitializer::settle(double t, const Vector& x_plus,
-                                                           const Vector& q_plus,
-                                                           const Predicates& p, double h,
-                                                           const Vector& motion_guess) {
+std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_plus,
+                                                     const Vector& q_plus, const Predicates& p,
+                                                     double h) {
   const double h_shortest = 1e3 * time_resolution(t);
   const Vector inverse_weight =
       (options_.rtol * x_plus.cwiseAbs() + absolute_tolerance_).cwiseInverse();
@@ -228,12 +204,12 @@ std::optional<Reinitializer::Settled> Reinitializer::settle(double t, const Vect
   // extrapolation stands.
   bool have_extrapolation = false;
   for (;; h *= 1e-3) {
-    Vector one = x_plus + h * motion_guess;
-    bool solved = backward_euler_with_continuation(settling_matrix(0), t + h, h, q_plus, p, p, one);
-    Vector two = one + h * motion_guess;
-    solved = solved && backward_euler_with_continuation(settling_matrix(1), t + 2 * h, 2 * h, q_plus, p, p, two);
-    Vector four = two + 2 * h * motion_guess;
-    solved = solved && backward_euler_with_continuation(settling_matrix(2), t + 4 * h, 4 * h, q_plus, p, p, four);
+    Vector one = x_plus;
+    bool solved = backward_euler_with_continuation(t + h, h, q_plus, p, p, one);
+    Vector two = one;
+    solved = solved && backward_euler_with_continuation(t + 2 * h, 2 * h, q_plus, p, p, two);
+    Vector four = two;
+    solved = solved && backward_euler_with_continuation(t + 4 * h, 4 * h, q_plus, p, p, four);
     if (!solved && have_extrapolation) {
       h *= 1e3;
       break;
@@ -249,50 +225,28 @@ std::optional<Reinitializer::Settled> Reinitializer::settle(double t, const Vect
     const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
     if (weighted_max_norm(curvature, inverse_weight) <= kSettleAccuracy || h * 1e-3 < h_shortest) break;
   }
-  Settled settled{std::move(extrapolated), std::move(x_one), h};
+  ConsistentState state;
+  state.x_impulse = x_plus;
+  state.x = extrapolated;
   // The vanishing step's differential unknowns are exact where it was well conditioned, and
   // the extrapolation agrees with them to Newton's tolerance; where they differ by more than a
   // tenth of the error tolerance the vanishing step lost the hidden algebraic directions.
-  if (weighted_max_norm(x_plus - settled.x, differential_weight) <= 0.1)
+  if (weighted_max_norm(x_plus - extrapolated, differential_weight) <= 0.1)
     for (int i = 0; i < system_.size(); ++i)
-      if (system_.kind(i) == UnknownKind::differential) settled.x[i] = x_plus[i];
-  return settled;
-}
-
-// The state after a jump: the settled x, q and its right derivative there, and where the new
-// motion heads (the first settling step).
-std::optional<ConsistentState> Reinitializer::consistent_state(double t, const Vector& x_plus,
-                                                               const Settled& settled,
-                                                               const Predicates& p) {
-  ConsistentState state;
-  state.x_impulse = x_plus;
-  state.x = settled.x;
+      if (system_.kind(i) == UnknownKind::differential) state.x[i] = x_plus[i];
   if (!derivatives_at(t, p, state)) return std::nullopt;
-  const double h = settled.h;
-  state.x_derivative = (settled.x_first_step - state.x) / h;
+  state.x_derivative = (x_one - state.x) / h;
   state.t_heading = t + h;
-  state.x_heading = settled.x_first_step;
+  state.x_heading = x_one;
   // The first settling step's -f is q' at t + h: a fast mode the new motion starts shows as
   // curvature, which bounds the first step after the restart.
-  if (newton_.evaluate(t + h, settled.x_first_step, p) != EvalStatus::ok) {
+  if (newton_.evaluate(t + h, x_one, p) != EvalStatus::ok) {
     failure_reason_ = "the model cannot be evaluated after the event";
     return std::nullopt;
   }
   state.q_second_derivative = (-newton_.load().f - state.q_derivative) / h;
   newton_.keep_dynamic_rows(state.q_second_derivative);
   return state;
-}
-
-std::optional<Vector> Reinitializer::project(double t, const Vector& x_guess,
-                                            const Vector& x_derivative_guess, const Predicates& p,
-                                            double h_reference) {
-  if (newton_.evaluate(t, x_guess, p) != EvalStatus::ok) return std::nullopt;
-  const Vector q = newton_.load().q;
-  Vector motion = x_derivative_guess;
-  for (int i : newton_.auxiliary_unknowns()) motion[i] = 0;  // held by the settling steps
-  auto settled = settle(t, x_guess, q, p, settle_step(t, h_reference), motion);
-  if (!settled) return std::nullopt;
-  return std::move(settled->x);
 }
 
 // q and its right derivative -f (dynamic rows) at the consistent state.x.

@@ -19,8 +19,6 @@
 // residuals of the old and the new mode.
 #pragma once
 
-#include <array>
-#include <memory>
 #include <optional>
 #include <string>
 
@@ -42,30 +40,15 @@ struct ConsistentState {
   Vector x_heading;
 };
 
-// Whether each settling step (lengths h, 2h, 4h) keeps its own factorization from one call to
-// the next. Dense output keeps them: its rows follow one another in time and mode, so a matrix
-// factored for an earlier row is usually still close to the one at the row's state (it is
-// refactored where it is not, or where modified Newton contracts slowly on it). Events factor
-// afresh on the caller's matrix: the integration never depends on what was factored before.
-enum class SettlingFactorizations { fresh, kept };
-
 class Reinitializer {
  public:
   Reinitializer(System& system, NewtonMatrix& newton, Statistics& statistics,
-                const Options& options, const Vector& absolute_tolerance,
-                SettlingFactorizations settling_factorizations = SettlingFactorizations::fresh);
+                const Options& options, const Vector& absolute_tolerance);
 
   // The state after the predicates changed from p_from to p_to at t; x_start already holds
   // the explicit jumps X e. h_reference: a step size typical of the solution near t.
   std::optional<ConsistentState> jump(double t, const Vector& x_start, const Predicates& p_from,
                                       const Predicates& p_to, double h_reference);
-
-  // x(t) with the charges of x_guess and everything else consistent with them: the algebraic
-  // unknowns and the hidden algebraic directions (a floating capacitor's common mode) that no
-  // error test controls are solved for, not taken from an interpolating polynomial.
-  // x_derivative_guess (the polynomial's) predicts the settling steps' motion for Newton.
-  std::optional<Vector> project(double t, const Vector& x_guess, const Vector& x_derivative_guess,
-                                const Predicates& p, double h_reference);
 
   const std::string& failure_reason() const { return failure_reason_; }
   int failure_unknown() const { return failure_unknown_; }
@@ -77,32 +60,15 @@ class Reinitializer {
  private:
   // Backward Euler of length h from charges q_start, for the blend of modes
   // (1 - lambda) p_from + lambda p_to, evaluated at t_eval; x holds the guess and the result.
-  // Newton iterates on `newton`, on the factorization it holds where that is kept and still
-  // close to the matrix at x.
-  bool backward_euler(NewtonMatrix& newton, double t_eval, double h, const Vector& q_start,
-                      const Vector& held, const Predicates& p_from, const Predicates& p_to,
-                      double lambda, Vector& x);
-  bool backward_euler_with_continuation(NewtonMatrix& newton, double t_eval, double h,
-                                        const Vector& q_start, const Predicates& p_from,
-                                        const Predicates& p_to, Vector& x);
-  // The matrix of settling step 0, 1, 2 (length h, 2h, 4h).
-  NewtonMatrix& settling_matrix(int step) {
-    return kept_settling_matrices_[step] ? *kept_settling_matrices_[step] : newton_;
-  }
+  bool backward_euler(double t_eval, double h, const Vector& q_start, const Vector& held,
+                      const Predicates& p_from, const Predicates& p_to, double lambda, Vector& x);
+  bool backward_euler_with_continuation(double t_eval, double h, const Vector& q_start,
+                                        const Predicates& p_from, const Predicates& p_to,
+                                        Vector& x);
   double time_resolution(double t) const;
   double settle_step(double t, double h_reference) const;
-  // The consistent state at t + 0 the settling steps reach, and the first of them (length h):
-  // where the new motion heads. Newton starts each step from the previous one's state moved by
-  // motion_guess (dx/dt) over the difference of their lengths.
-  struct Settled {
-    Vector x;
-    Vector x_first_step;
-    double h;
-  };
-  std::optional<Settled> settle(double t, const Vector& x_plus, const Vector& q_plus,
-                                const Predicates& p, double h, const Vector& motion_guess);
-  std::optional<ConsistentState> consistent_state(double t, const Vector& x_plus,
-                                                  const Settled& settled, const Predicates& p);
+  std::optional<ConsistentState> settle(double t, const Vector& x_plus, const Vector& q_plus,
+                                        const Predicates& p, double h);
   bool derivatives_at(double t, const Predicates& p, ConsistentState& state);
 
   System& system_;
@@ -110,12 +76,9 @@ class Reinitializer {
   Statistics& statistics_;
   const Options& options_;
   const Vector& absolute_tolerance_;
-  const SettlingFactorizations settling_factorizations_;
-  std::array<std::unique_ptr<NewtonMatrix>, 3> kept_settling_matrices_;  // empty when fresh
   std::string failure_reason_;
   int failure_unknown_ = -1;
   std::optional<Vector> stalled_state_;
-  Vector delta_, inverse_weight_;  // backward_euler's, kept so that its iterations do not allocate
 };
 
 }  // namespace padae

@@ -1,5 +1,5 @@
 // Elaboration: AST -> FlatCircuit. The subcircuit hierarchy is checked first (recursion, depth,
-// the number of elements it expands to) without building anything; then parameters are
+// the number of cards it expands to) without building anything; then parameters are
 // evaluated in dependency order, subcircuits expanded with hierarchical names, references
 // (models, controlling sources, inductors) checked.
 //
@@ -100,22 +100,6 @@ void flatten_includes(const std::vector<ast::Card>& cards, std::vector<const ast
   }
 }
 
-// Cards that become one flat element each (an X card becomes its subcircuit's elements).
-bool is_element(const ast::Card& card) {
-  return std::visit(
-      [](const auto& node) {
-        using Node = std::decay_t<decltype(node)>;
-        return std::is_same_v<Node, ast::TwoTerminal> || std::is_same_v<Node, ast::Coupling> ||
-               std::is_same_v<Node, ast::IndependentSource> ||
-               std::is_same_v<Node, ast::VoltageControlled> ||
-               std::is_same_v<Node, ast::CurrentControlled> ||
-               std::is_same_v<Node, ast::Behavioral> || std::is_same_v<Node, ast::Diode> ||
-               std::is_same_v<Node, ast::VoltageSwitch> ||
-               std::is_same_v<Node, ast::CurrentSwitch>;
-      },
-      card.node);
-}
-
 // Parameter values of one subcircuit instance (or the top level), falling back to the
 // enclosing instance's.
 struct Scope {
@@ -162,16 +146,18 @@ void define_subcircuits(const std::vector<const ast::Card*>& cards, Definitions&
                           "subcircuit '" + subcircuit->name.text + "' is defined twice");
 }
 
-// The subcircuit hierarchy, checked before elaboration builds anything: an instance of a
-// subcircuit being expanded (recursion), nesting deeper than max_subcircuit_depth, and more
-// elements than the limit. Subcircuits instantiating subcircuits multiply (ten levels of ten
-// instances are 10^10 elements), so the elements are counted once per subcircuit definition
-// (its own plus, per X card, its subcircuit's; saturating) and per scope its names resolve in:
-// a subcircuit defined inside a body is seen by the bodies that body's instances expand.
+// The subcircuit hierarchy, checked before elaboration builds anything: an instance of a subcircuit
+// being expanded (recursion), nesting deeper than max_subcircuit_depth, and more cards than the
+// limit. Elaboration visits every card of a body once per instance of it, and those visits are
+// counted: an X card is one plus its subcircuit's cards, and empty subcircuits, or bodies of only
+// models or parameters, count too. Subcircuits instantiating subcircuits multiply (ten levels of
+// ten instances are 10^10 cards), so the cards are counted once per subcircuit definition
+// (saturating) and per scope its names resolve in: a subcircuit defined inside a body is seen by
+// the bodies that body's instances expand.
 class Hierarchy {
  public:
-  Hierarchy(Diagnostics& diagnostics, std::size_t max_elements)
-      : diagnostics_(diagnostics), max_elements_(max_elements) {}
+  Hierarchy(Diagnostics& diagnostics, std::size_t max_cards)
+      : diagnostics_(diagnostics), max_cards_(max_cards) {}
 
   // True if the top-level cards may be elaborated; otherwise an error was reported.
   bool check(const std::vector<const ast::Card*>& cards) {
@@ -181,15 +167,16 @@ class Hierarchy {
     const ast::Card* over_limit = nullptr;
     if (!walk(cards, top, chain, &over_limit)) return false;
     if (!over_limit) return true;
-    diagnostics_.error(over_limit->where, "the circuit expands to more than " +
-                                              std::to_string(max_elements_) + " elements");
+    diagnostics_.error(over_limit->where,
+                       "the circuit expands to more than " + std::to_string(max_cards_) +
+                           " cards (each subcircuit instance counts, with its body's cards)");
     return false;
   }
 
  private:
   struct Expansion {
-    std::size_t elements = 0;  // saturating
-    std::size_t depth = 0;     // levels of subcircuit bodies below this one
+    std::size_t cards = 0;  // saturating
+    std::size_t depth = 0;  // levels of subcircuit bodies below this one
   };
 
   // The expansion of a body; nullopt if recursion or too deep nesting was reported. `chain` are
@@ -200,17 +187,17 @@ class Hierarchy {
                                 const ast::Card** over_limit = nullptr) {
     Expansion total;
     for (const ast::Card* card : cards) {
-      std::size_t elements = is_element(*card) ? 1 : 0;
+      std::size_t expanded = 1;
       if (auto* instance = std::get_if<ast::Instance>(&card->node)) {
         const ast::Subcircuit* subcircuit = definitions.find_subcircuit(instance->subcircuit.text);
         if (!subcircuit) continue;  // elaboration reports it
         auto inner = expand(*instance, *subcircuit, definitions, chain);
         if (!inner) return std::nullopt;
-        elements = inner->elements;
+        expanded = saturating_add(expanded, inner->cards);
         total.depth = std::max(total.depth, inner->depth + 1);
       }
-      total.elements = saturating_add(total.elements, elements);
-      if (over_limit && !*over_limit && total.elements > max_elements_) *over_limit = card;
+      total.cards = saturating_add(total.cards, expanded);
+      if (over_limit && !*over_limit && total.cards > max_cards_) *over_limit = card;
     }
     return total;
   }
@@ -263,7 +250,7 @@ class Hierarchy {
 
   using Key = std::pair<const ast::Subcircuit*, const Definitions*>;
   Diagnostics& diagnostics_;
-  std::size_t max_elements_;
+  std::size_t max_cards_;
   std::map<Key, Expansion> expansions_;
   std::map<Key, std::unique_ptr<Definitions>> scopes_;
 };
@@ -285,8 +272,8 @@ struct Instance {
 
 class Elaborator {
  public:
-  Elaborator(Diagnostics& diagnostics, std::size_t max_elements)
-      : diagnostics_(diagnostics), max_elements_(max_elements) {}
+  Elaborator(Diagnostics& diagnostics, std::size_t max_cards)
+      : diagnostics_(diagnostics), max_cards_(max_cards) {}
 
   std::optional<FlatCircuit> run(const ast::Netlist& netlist) {
     int errors_before = diagnostics_.error_count();
@@ -296,7 +283,7 @@ class Elaborator {
     has_tran_ = std::any_of(cards.begin(), cards.end(), [](const ast::Card* card) {
       return std::holds_alternative<ast::TranCard>(card->node);
     });
-    if (!Hierarchy(diagnostics_, max_elements_).check(cards)) return std::nullopt;
+    if (!Hierarchy(diagnostics_, max_cards_).check(cards)) return std::nullopt;
     Scope global;
     Definitions definitions;
     Instance top{"", {}, &global, &definitions};
@@ -933,7 +920,7 @@ class Elaborator {
 
   Diagnostics& diagnostics_;
   FlatCircuit circuit_;
-  std::size_t max_elements_;
+  std::size_t max_cards_;
   bool has_tran_ = false;
   std::unordered_map<std::string, std::size_t> element_index_;
   std::vector<ControlUse> control_uses_;
@@ -943,8 +930,8 @@ class Elaborator {
 }  // namespace
 
 std::optional<FlatCircuit> elaborate(const ast::Netlist& netlist, Diagnostics& diagnostics,
-                                     std::size_t max_elements) {
-  return Elaborator(diagnostics, max_elements).run(netlist);
+                                     std::size_t max_cards) {
+  return Elaborator(diagnostics, max_cards).run(netlist);
 }
 
 std::optional<FlatCircuit> load(const std::filesystem::path& path, Diagnostics& diagnostics) {

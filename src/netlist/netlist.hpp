@@ -18,13 +18,15 @@ namespace netlist {
 ast::Netlist parse_text(std::string text, std::string path, Diagnostics& diagnostics);
 ast::Netlist parse_file(const std::filesystem::path& path, Diagnostics& diagnostics);
 
-// A circuit whose subcircuits expand to more elements than this is refused (counted before any
-// is built).
-inline constexpr std::size_t max_flat_elements = 10'000'000;
+// A circuit whose subcircuits expand to more cards than this is refused (counted before any is
+// built). Every card elaboration visits counts, once per instance of the body it is in: each
+// element, each X card (even of an empty subcircuit), each model, parameter or other card; so
+// it bounds the cards elaboration processes, not only the elements it builds.
+inline constexpr std::size_t max_expanded_cards = 10'000'000;
 
 // Evaluate parameters, expand subcircuits, check references. nullopt when any error occurred.
 std::optional<FlatCircuit> elaborate(const ast::Netlist& netlist, Diagnostics& diagnostics,
-                                     std::size_t max_elements = max_flat_elements);
+                                     std::size_t max_cards = max_expanded_cards);
 
 // parse_file then elaborate; nullopt if either reported an error.
 std::optional<FlatCircuit> load(const std::filesystem::path& path, Diagnostics& diagnostics);

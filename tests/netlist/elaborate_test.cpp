@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -258,7 +259,7 @@ TEST(Elaborate, BehavioralExpressionsKeepConditions) {
   EXPECT_EQ(element(circuit, "r2").value, 5.0 + 6.0);
 }
 
-// ---- the hierarchy check: element count, depth ---------------------------------------------
+// ---- the hierarchy check: card count, depth ------------------------------------------------
 
 struct Elaborated {
   netlist::Diagnostics diagnostics;
@@ -273,11 +274,11 @@ struct Elaborated {
 };
 
 Elaborated elaborate_limited(const std::string& text,
-                             std::size_t max_elements = netlist::max_flat_elements) {
+                             std::size_t max_cards = netlist::max_expanded_cards) {
   Elaborated result;
   auto parsed = netlist::parse_text(text, "t.cir", result.diagnostics);
   EXPECT_FALSE(result.diagnostics.has_errors()) << result.diagnostics.to_string();
-  result.circuit = netlist::elaborate(parsed, result.diagnostics, max_elements);
+  result.circuit = netlist::elaborate(parsed, result.diagnostics, max_cards);
   return result;
 }
 
@@ -289,9 +290,10 @@ int line_of(const std::string& text, const std::string& needle) {
 }
 
 // Subcircuits l1 .. l<levels>, each with `fanout` instances of the one below, over l0 (one
-// resistor); the top level has V1 and one instance of l<levels>: 1 + fanout^levels elements.
-std::string nested(int levels, int fanout) {
-  std::string text = "t\n.subckt l0 a\nR1 a 0 1\n.ends\n";
+// resistor, or `leaf`); the top level has V1 and one instance of l<levels>: 1 + fanout^levels
+// elements.
+std::string nested(int levels, int fanout, const std::string& leaf = "R1 a 0 1\n") {
+  std::string text = "t\n.subckt l0 a\n" + leaf + ".ends\n";
   for (int level = 1; level <= levels; ++level) {
     text += ".subckt l" + std::to_string(level) + " a\n";
     for (int i = 0; i < fanout; ++i)  // appended in pieces: GCC 12 warns (-Wrestrict) on "X" + ...
@@ -311,43 +313,65 @@ void expect_one_error(const Elaborated& e, const std::string& message, int line,
   EXPECT_EQ(errors[0].where.begin.column, column);
 }
 
-TEST(Elaborate, ElementCountAtTheLimitIsBuiltAndOneMoreIsRefusedAtTheTopLevelInstance) {
-  std::string text = nested(3, 4);  // 1 + 4^3 = 65 elements
-  Elaborated at_limit = elaborate_limited(text, 65);
-  ASSERT_TRUE(at_limit.circuit) << at_limit.diagnostics.to_string();
-  EXPECT_EQ(at_limit.circuit->elements.size(), 65u);
-  expect_one_error(elaborate_limited(text, 64), "the circuit expands to more than 64 elements",
-                   line_of(text, "Xtop"), 1);
+std::string over_limit(std::size_t max_cards) {
+  return "the circuit expands to more than " + std::to_string(max_cards) +
+         " cards (each subcircuit instance counts, with its body's cards)";
 }
 
-TEST(Elaborate, ElementCountResolvesSubcircuitsAsTheExpansionDoes) {
+TEST(Elaborate, CardCountAtTheLimitIsBuiltAndOneMoreIsRefusedAtTheTopLevelInstance) {
+  // 65 elements: 1 + 4^3; 85 X cards: 1 + 4 + 4^2 + 4^3; 4 .subckt cards at the top level.
+  std::string text = nested(3, 4);
+  Elaborated at_limit = elaborate_limited(text, 154);
+  ASSERT_TRUE(at_limit.circuit) << at_limit.diagnostics.to_string();
+  EXPECT_EQ(at_limit.circuit->elements.size(), 65u);
+  expect_one_error(elaborate_limited(text, 153), over_limit(153), line_of(text, "Xtop"), 1);
+}
+
+TEST(Elaborate, CardCountResolvesSubcircuitsAsTheExpansionDoes) {
   // inner is defined in outer's body; user's instances inside outer see it.
   std::string text =
       "t\n"
       ".subckt user a\nXq a inner\n.ends\n"
       ".subckt outer a\n.subckt inner b\nR1 b 0 1\nR2 b 0 1\n.ends\nX1 a user\nX2 a user\n.ends\n"
       "X1 n outer\n";
-  Elaborated at_limit = elaborate_limited(text, 4);
+  // Top level: 2 .subckt cards and X1 (1); outer: .subckt inner, X1 and X2 (3); each user: Xq
+  // (1) and inner's R1 and R2 (2).
+  Elaborated at_limit = elaborate_limited(text, 12);
   ASSERT_TRUE(at_limit.circuit) << at_limit.diagnostics.to_string();
   EXPECT_EQ(at_limit.circuit->elements.size(), 4u);
   EXPECT_TRUE(at_limit.circuit->find_element("x1.x2.xq.r2"));
-  expect_one_error(elaborate_limited(text, 3), "the circuit expands to more than 3 elements",
-                   line_of(text, "X1 n outer"), 1);
+  expect_one_error(elaborate_limited(text, 11), over_limit(11), line_of(text, "X1 n outer"), 1);
 }
 
 TEST(Elaborate, TenLevelsOfTenInstancesAreRefusedWithoutBuildingThem) {
   // 1 + 10^10 elements: counted per subcircuit, refused in milliseconds (building them until
   // the limit took 40 s).
   std::string text = nested(10, 10);
-  expect_one_error(elaborate_limited(text), "the circuit expands to more than 10000000 elements",
-                   line_of(text, "Xtop"), 1);
+  expect_one_error(elaborate_limited(text), over_limit(10'000'000), line_of(text, "Xtop"), 1);
 }
 
-TEST(Elaborate, ElementCountSaturates) {
-  // 2^64 elements: a wrapping count would be 0 (and then 1 with V1).
+TEST(Elaborate, TenLevelsOfTenInstancesOfEmptySubcircuitsAreRefusedWithoutExpandingThem) {
+  // No element below the top level, but 10^10 instances to expand (counting elements only, this
+  // was 1: padsim was still expanding after 10 minutes, deaf to SIGTERM).
+  std::string text = nested(10, 10, "");
+  auto start = std::chrono::steady_clock::now();
+  expect_one_error(elaborate_limited(text), over_limit(10'000'000), line_of(text, "Xtop"), 1);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(1));
+}
+
+TEST(Elaborate, ModelsInSubcircuitsCountPerInstance) {
+  // Each instance elaborates its own copy of a model defined in its subcircuit: 10^6 instances
+  // of 100 models are 10^8 models to build.
+  std::string models;
+  for (int i = 0; i < 100; ++i) models += ".model d" + std::to_string(i) + " d\n";
+  std::string text = nested(6, 10, models);
+  expect_one_error(elaborate_limited(text), over_limit(10'000'000), line_of(text, "Xtop"), 1);
+}
+
+TEST(Elaborate, CardCountSaturates) {
+  // 2^64 elements: a wrapping count would be small.
   std::string text = nested(64, 2);
-  expect_one_error(elaborate_limited(text), "the circuit expands to more than 10000000 elements",
-                   line_of(text, "Xtop"), 1);
+  expect_one_error(elaborate_limited(text), over_limit(10'000'000), line_of(text, "Xtop"), 1);
 }
 
 // Subcircuits s0 (one resistor) .. s<n-1>, each instantiating the one below.

@@ -30,9 +30,8 @@ DenseOutput::DenseOutput(System& system, const Options& options, const Vector& a
 
 std::optional<Vector> DenseOutput::solve(double t, const Vector& x_polynomial,
                                          const Vector& q_polynomial, const Vector& q_derivative,
-                                         const Predicates& p, double h) {
-  if (!(h > 0)) return std::nullopt;
-  const double c = 1 / h;
+                                         const Predicates& p, double c) {
+  if (!(c > 0) || !std::isfinite(c)) return std::nullopt;
   Vector x = x_polynomial;
   double keep_within = kKeptMatrixDrift;  // only the first factorization may keep the one held
   bool refactor = true;

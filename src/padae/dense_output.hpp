@@ -1,16 +1,19 @@
-// Dense output: the state inside an accepted step, for writing.
+// The solution inside an accepted step: what a step of the same order from the same history
+// would reach at an inner time t. Written as dense output and used to locate events.
 //
-// The step's interpolating polynomial is error-controlled only for the charges q of the
-// dynamic rows. The unknowns no error test sees (algebraic ones, and hidden algebraic
-// directions such as a floating capacitor's common mode) can be far off on it: a node behind
-// a junction that is nearly off moves by volts for microvolts of its charges. The state
-// written is instead the solution of the step's own corrector equation at t, with the
-// polynomial in place of the predictor:
-//     q'_poly(t) + c (q(x) - q_poly(t)) + f(t, x) = 0,    c = 1/h, h the step's length.
-// Algebraic rows are solved exactly; a dynamic row's q stays within h times the polynomial's
-// residual there (the size of the local error) of q_poly; a mode faster than the step is
-// damped as the integration's backward differences damp it. The equation is as well
-// conditioned as the corrector's, and at the step's end its solution is the corrector's.
+// The step's interpolating polynomial S (IDA's) is error-controlled only for the charges q of
+// the dynamic rows. The unknowns no error test sees (algebraic ones, and hidden algebraic
+// directions such as a floating capacitor's common mode) can be far off on it: a node behind a
+// junction that is nearly off moves by volts for microvolts of its charges, and a source's node
+// between the step's points is off by the polynomial's error in the source. Holding S's
+// charges and solving for the rest turns their interpolation error into volts where the
+// unknowns are flat in the charges. The BDF step from the step's start to t instead is
+//     S'(t) + c (q(x) - S(t)) + f(t, x) = 0,    c = sum_j 1 / (t - t_j),
+// t_j the step's start and the points before it that S passes through: the polynomial through
+// (t, q(x)) and those points differs from S by a multiple of prod_j (t - t_j). Algebraic rows
+// are solved exactly, q moves from S(t) by the step's own local error, a mode faster than the
+// step is damped as the integration damps it, and at the step's end the solution is the
+// corrector's.
 #pragma once
 
 #include <optional>
@@ -24,14 +27,14 @@ class DenseOutput {
  public:
   DenseOutput(System& system, const Options& options, const Vector& absolute_tolerance);
 
-  // x at t inside a step of length h taken in mode p; the polynomial gives x_polynomial
-  // (Newton's start, and the value of auxiliary unknowns), q_polynomial and q_derivative.
-  // Empty where Newton fails (the caller keeps the polynomial).
+  // x at t inside a step taken in mode p, for the c above; S gives x_polynomial (Newton's
+  // start, and the value of auxiliary unknowns), q_polynomial and q_derivative. Empty where
+  // Newton fails.
   std::optional<Vector> solve(double t, const Vector& x_polynomial, const Vector& q_polynomial,
-                              const Vector& q_derivative, const Predicates& p, double h);
+                              const Vector& q_derivative, const Predicates& p, double c);
 
  private:
-  Statistics statistics_;  // its own: writing output never changes the integration's counts
+  Statistics statistics_;  // its own counters: output's work is not the integration's
   NewtonMatrix newton_;    // kept from row to row while it stays close to the matrix at x
   const Options& options_;
   const Vector& absolute_tolerance_;

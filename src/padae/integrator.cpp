@@ -96,6 +96,9 @@ struct Integrator::Impl {
   enum class Quantity { x, q };
   Vector interpolate(double t_at, Interpolated what = Interpolated::value, Quantity of = Quantity::x) const;
   double first_step_estimate(double t_at, const Vector& x_at);
+  // x at t_at inside the last step as a step of its order from its start would reach it
+  // (dense_output.hpp); the polynomial's x where that cannot be solved.
+  Vector step_solution(DenseOutput& solver, double t_at) const;
 
   // --- events ----------------------------------------------------------------------------
   bool evaluate_guards(double t_at, const Vector& x_at, Vector& out) const;
@@ -117,7 +120,9 @@ struct Integrator::Impl {
   Vector absolute_tolerance;
   NewtonMatrix newton;
   Reinitializer reinitializer;
-  std::unique_ptr<DenseOutput> dense_output;  // made on first use
+  // Solutions inside a step: one for locating events, one for writing (its kept factorization
+  // must not steer the integration). Made on first use.
+  std::unique_ptr<DenseOutput> location_solver, output_solver;
 
   // The solution.
   double t = 0;
@@ -144,7 +149,6 @@ struct Integrator::Impl {
     int order = 0;
     std::array<Vector, kHistory> phi_x, phi_q;
     std::array<double, kHistory> psi{};
-    double h = 0;  // the step's length
     Predicates p;  // the mode the step was taken in
   } previous_step;
   bool after_restart() const { return order_used == 0 && previous_step.order > 0; }
@@ -735,9 +739,24 @@ Vector Integrator::Impl::evaluate_polynomial(double anchor_at, int order_of, con
   return result;
 }
 
+Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
+  const bool previous = after_restart();
+  const double step_end = previous ? previous_step.anchor : anchor;
+  const int step_order = previous ? previous_step.order : order_used;
+  const auto& step_psi = previous ? previous_step.psi : psi;
+  Vector x_at = interpolate(t_at);
+  // The points S passes through before the step's end are t_j = end - psi_j, j < order.
+  double c = 0;
+  for (int j = 0; j < step_order; ++j) c += 1 / (t_at - (step_end - step_psi[j]));
+  auto solved = solver.solve(t_at, x_at, interpolate(t_at, Interpolated::value, Quantity::q),
+                             interpolate(t_at, Interpolated::derivative, Quantity::q),
+                             previous ? previous_step.p : step_predicates, c);
+  return solved ? std::move(*solved) : x_at;
+}
+
 // Order 1 from a consistent state, as after the initial point (IDA's first step).
 void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
-  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, phi_q, psi, h_used, step_predicates};
+  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, phi_q, psi, step_predicates};
   anchor = t_at;
   t = t_at;
   x = consistent.x;
@@ -827,16 +846,8 @@ const Statistics& Integrator::statistics() const { return impl_->statistics; }
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
 Vector Integrator::dense_output(double t_at) {
   Impl& s = *impl_;
-  using Interpolated = Impl::Interpolated;
-  using Quantity = Impl::Quantity;
-  Vector x_at = s.interpolate(t_at);
-  if (!s.dense_output) s.dense_output = std::make_unique<DenseOutput>(s.system, s.options, s.absolute_tolerance);
-  const bool previous = s.after_restart();
-  auto solved = s.dense_output->solve(t_at, x_at, s.interpolate(t_at, Interpolated::value, Quantity::q),
-                                      s.interpolate(t_at, Interpolated::derivative, Quantity::q),
-                                      previous ? s.previous_step.p : s.step_predicates,
-                                      previous ? s.previous_step.h : s.h_used);
-  return solved ? *solved : x_at;
+  if (!s.output_solver) s.output_solver = std::make_unique<DenseOutput>(s.system, s.options, s.absolute_tolerance);
+  return s.step_solution(*s.output_solver, t_at);
 }
 
 }  // namespace padae

@@ -23,8 +23,10 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 
 }  // namespace
 
-DenseOutput::DenseOutput(System& system, const Options& options, const Vector& absolute_tolerance)
-    : newton_(system, statistics_, absolute_tolerance / options.rtol),
+DenseOutput::DenseOutput(System& system, Statistics& statistics, const Options& options,
+                         const Vector& absolute_tolerance)
+    : statistics_(statistics),
+      newton_(system, statistics, absolute_tolerance / options.rtol),
       options_(options),
       absolute_tolerance_(absolute_tolerance) {}
 
@@ -43,6 +45,7 @@ std::optional<Vector> DenseOutput::solve(double t, const Vector& x_polynomial,
     } else if (newton_.evaluate(t, x, p) != EvalStatus::ok) {
       return std::nullopt;
     }
+    ++statistics_.newton_iterations;
     const Load& load = newton_.load();
     delta_.noalias() = q_derivative + c * (load.q - q_polynomial) + load.f;
     for (int i : newton_.auxiliary_unknowns()) delta_[i] = x[i] - x_polynomial[i];

@@ -25,7 +25,9 @@ namespace padae {
 
 class DenseOutput {
  public:
-  DenseOutput(System& system, const Options& options, const Vector& absolute_tolerance);
+  // Its Newton work is counted in statistics.
+  DenseOutput(System& system, Statistics& statistics, const Options& options,
+              const Vector& absolute_tolerance);
 
   // x at t inside a step taken in mode p, for the c above; S gives x_polynomial (Newton's
   // start, and the value of auxiliary unknowns), q_polynomial and q_derivative. Empty where
@@ -34,7 +36,7 @@ class DenseOutput {
                               const Vector& q_derivative, const Predicates& p, double c);
 
  private:
-  Statistics statistics_;  // its own counters: output's work is not the integration's
+  Statistics& statistics_;
   NewtonMatrix newton_;    // kept from row to row while it stays close to the matrix at x
   const Options& options_;
   const Vector& absolute_tolerance_;

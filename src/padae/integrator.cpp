@@ -120,9 +120,11 @@ struct Integrator::Impl {
   Vector absolute_tolerance;
   NewtonMatrix newton;
   Reinitializer reinitializer;
-  // Solutions inside a step: one for locating events, one for writing (its kept factorization
-  // must not steer the integration). Made on first use.
+  // Solutions inside a step: one for locating events, one for writing, with counters of its own
+  // (writing output never changes the integration: its kept factorization, its statistics).
+  // Made on first use.
   std::unique_ptr<DenseOutput> location_solver, output_solver;
+  Statistics output_statistics;
 
   // The solution.
   double t = 0;
@@ -563,14 +565,17 @@ bool Integrator::Impl::evaluate_guards(double t_at, const Vector& x_at, Vector& 
 }
 
 StepOutcome Integrator::Impl::handle_state_event(double t_old, const Vector& guards_old) {
-  // Locate the earliest crossing on the step's interpolating polynomial.
-  auto guards_at = [&](double t_at, Vector& out) { return evaluate_guards(t_at, interpolate(t_at), out); };
+  // Locate the earliest crossing on the solution inside the step: on the interpolating
+  // polynomial itself an algebraic unknown (a source's node) is off by the polynomial's error,
+  // and a guard on it crosses early or late.
+  if (!location_solver) location_solver = std::make_unique<DenseOutput>(system, statistics, options, absolute_tolerance);
+  auto guards_at = [&](double t_at, Vector& out) { return evaluate_guards(t_at, step_solution(*location_solver, t_at), out); };
   const double tolerance = 100 * kEps * (std::abs(t) + std::abs(h_used));
   Crossing crossing = locate_first_crossing(guards_at, p, t_old, guards_old, t, guards_now, tolerance);
   if (!crossing.ok) return fail(t, "a guard function cannot be evaluated while locating an event near t = " + format_time(t));
 
   const double t_event = crossing.t_right;
-  const Vector x_before = interpolate(t_event);
+  const Vector x_before = step_solution(*location_solver, t_event);
   Predicates target = p;
   for (int k = 0; k < predicate_count; ++k) target[k] = crossing.guards_right[k] > 0;
   // Accumulation (Zeno): events closer than the time resolution, or intervals shrinking
@@ -846,7 +851,7 @@ const Statistics& Integrator::statistics() const { return impl_->statistics; }
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
 Vector Integrator::dense_output(double t_at) {
   Impl& s = *impl_;
-  if (!s.output_solver) s.output_solver = std::make_unique<DenseOutput>(s.system, s.options, s.absolute_tolerance);
+  if (!s.output_solver) s.output_solver = std::make_unique<DenseOutput>(s.system, s.output_statistics, s.options, s.absolute_tolerance);
   return s.step_solution(*s.output_solver, t_at);
 }
 

@@ -34,16 +34,7 @@ CASES_DIR = HERE / "cases"
 BAD_DIR = HERE / "invalid"  # the netlist corpus test skips directories named invalid
 
 # Cases padsim fails today, with the reason (shown in CTest as disabled and in the report).
-KNOWN_FAILURES = {
-    "diode_turnoff_at_peak":
-        "integrator (an ideal diode's turn-on): in the second and third cycles D1 turns on, off 4e-16 s later and "
-        "on again 0.57 us later (t = 23.6945 ms, 23.6951 ms): 8 flips in 3 cycles where a half-wave rectifier "
-        "has 6 (the turn-off currents after the peaks are right). Cause: the turn-on is located on the 1 ms step's "
-        "interpolating polynomial, whose v(in) (an algebraic node, not error-tested) is 0.73 mV off; on the "
-        "consistent state the diode is still short of turning on. Locating on a corrector solve at each trial time "
-        "fixes this case but moves charge-sharing events (its change to the differential unknowns); the fix is to "
-        "re-solve the step from its start to the trial time.",
-}
+KNOWN_FAILURES = {}
 
 BAD_INPUT_SECONDS = 10  # a refusal takes milliseconds; 10 s leaves room for the sanitizer build
 SANITIZER_MARKS = ("AddressSanitizer", "LeakSanitizer", "UndefinedBehaviorSanitizer", "runtime error:")

@@ -51,9 +51,9 @@ int main(int argc, char** argv) {
   app.add_option("--plot", options.plot, "PNG of the probed signals (gnuplot)");
   app.add_flag("-q,--quiet", options.quiet, "no warnings, no progress line");
   app.add_flag("--grid", options.grid,
-               "also write rows on the .tran TSTEP grid: each is the step's corrector equation solved at "
-               "its time with the step's interpolating polynomial as predictor (charges and fluxes within "
-               "the step's local error, the other unknowns consistent with them)");
+               "also write rows on the .tran TSTEP grid: each is the BDF step from the step's start to "
+               "the row's time (charges and fluxes within the step's local error, the other unknowns "
+               "consistent with them)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -120,9 +120,9 @@ struct Integrator::Impl {
   Vector absolute_tolerance;
   NewtonMatrix newton;
   Reinitializer reinitializer;
-  // Solutions inside a step: one for locating events, one for writing, with counters of its own
-  // (writing output never changes the integration: its kept factorization, its statistics).
-  // Made on first use.
+  // Solutions inside a step, made on first use: one locates events (its work counts as the
+  // integration's), one writes output with counters of its own (writing output never changes
+  // the integration: neither its kept factorization nor its statistics).
   std::unique_ptr<DenseOutput> location_solver, output_solver;
   Statistics output_statistics;
 

@@ -128,12 +128,12 @@ class Integrator {
   const Predicates& predicates() const;   // p for the next step
   int order() const;                      // order of the last step
   double step_size() const;               // size of the last step
-  // Dense output: x(t) for t inside the last step, from its interpolating polynomial.
+  // x(t) for t inside the last step from its interpolating polynomial: cheap, but the unknowns
+  // the error test does not control can be far off on it.
   Vector interpolate(double t) const;
-  // Dense output for writing: the step's corrector equation solved at t with the polynomial as
-  // predictor (dense_output.hpp), so that the unknowns the error test does not control
-  // (algebraic ones, hidden algebraic directions) are consistent. Falls back to the
-  // interpolating polynomial where Newton fails.
+  // Dense output for writing: the BDF step from the last step's start to t (dense_output.hpp),
+  // so that the unknowns the error test does not control (algebraic ones, hidden algebraic
+  // directions) are consistent. Falls back to the interpolating polynomial where Newton fails.
   Vector dense_output(double t);
 
   const EventRecord& last_event() const;

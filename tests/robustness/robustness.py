@@ -827,7 +827,13 @@ def kill_case(c, sig):
     text = csv_path.read_text() if csv_path.exists() else ""
     lines = text.split("\n")
     c.expect(lines and lines[0] == "time,v(x)", f"the CSV has its header ({lines[0] if lines else 'empty'!r})")
-    c.expect(text.endswith("\n"), "the CSV ends with a whole row")
+    # SIGKILL leaves no chance to finish a write, and Linux ends a write to a file early, at a
+    # page boundary, when a fatal signal arrives: the last line may be cut. Every other row is
+    # whole; SIGTERM's rows all are.
+    if sig == signal.SIGKILL and not text.endswith("\n"):
+        c.figure(f"the last line was cut by SIGKILL mid-write ({len(lines.pop())} characters)")
+    else:
+        c.expect(text.endswith("\n"), "the CSV ends with a whole row")
     rows, bad = [], 0
     for line in lines[1:]:
         if not line:

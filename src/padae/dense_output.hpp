@@ -29,11 +29,12 @@ class DenseOutput {
   DenseOutput(System& system, Statistics& statistics, const Options& options,
               const Vector& absolute_tolerance);
 
-  // x at t inside a step taken in mode p, for the c above; S gives x_polynomial (Newton's
-  // start, and the value of auxiliary unknowns), q_polynomial and q_derivative. Empty where
+  // x at t inside a step taken in mode p, for the c above, with Newton from x_guess; S gives
+  // x_polynomial (the value of auxiliary unknowns), q_polynomial and q_derivative. Empty where
   // Newton fails.
-  std::optional<Vector> solve(double t, const Vector& x_polynomial, const Vector& q_polynomial,
-                              const Vector& q_derivative, const Predicates& p, double c);
+  std::optional<Vector> solve(double t, const Vector& x_guess, const Vector& x_polynomial,
+                              const Vector& q_polynomial, const Vector& q_derivative,
+                              const Predicates& p, double c);
 
  private:
   Statistics& statistics_;

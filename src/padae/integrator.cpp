@@ -48,6 +48,10 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // are taken as events accumulating toward a finite time.
 constexpr int kAccumulationEvents = 12;
 constexpr double kAccumulationRatio = 0.8;
+// The solution inside a step: the largest c, relative to the step's own, and the continuation's
+// first point, at 2^-kContinuationHalvings of the distance from the step's start.
+constexpr double kMaxStiffening = 1e3;
+constexpr int kContinuationHalvings = 10;
 
 // Over the entries that have a weight (the others are not tested).
 double weighted_norm(const Vector& v, const Vector& inverse_weight, ErrorNorm kind) {
@@ -749,14 +753,36 @@ Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
   const double step_end = previous ? previous_step.anchor : anchor;
   const int step_order = previous ? previous_step.order : order_used;
   const auto& step_psi = previous ? previous_step.psi : psi;
-  Vector x_at = interpolate(t_at);
+  const Predicates& step_mode = previous ? previous_step.p : step_predicates;
   // The points S passes through before the step's end are t_j = end - psi_j, j < order.
-  double c = 0;
-  for (int j = 0; j < step_order; ++j) c += 1 / (t_at - (step_end - step_psi[j]));
-  auto solved = solver.solve(t_at, x_at, interpolate(t_at, Interpolated::value, Quantity::q),
-                             interpolate(t_at, Interpolated::derivative, Quantity::q),
-                             previous ? previous_step.p : step_predicates, c);
-  return solved ? std::move(*solved) : x_at;
+  auto c_at = [&](double t_of) {
+    double sum = 0;
+    for (int j = 0; j < step_order; ++j) sum += 1 / (t_of - (step_end - step_psi[j]));
+    return sum;
+  };
+  // Close to the step's start c grows without bound, and with it the matrix's condition: c
+  // stays within kMaxStiffening of its value at the step's end, where q is pinned to S within
+  // a thousandth of the step's residual anyway.
+  const double c_max = kMaxStiffening * c_at(step_end);
+  auto solve_at = [&](double t_of, const Vector& guess) {
+    return solver.solve(t_of, guess, interpolate(t_of), interpolate(t_of, Interpolated::value, Quantity::q),
+                        interpolate(t_of, Interpolated::derivative, Quantity::q), step_mode,
+                        std::min(c_at(t_of), c_max));
+  };
+  Vector x_at = interpolate(t_at);
+  if (step_order == 0) return x_at;
+  if (auto solved = solve_at(t_at, x_at)) return std::move(*solved);
+  // Newton from the polynomial can fail where it is far from the solution (the common mode of
+  // a load floating between junctions): continuation from the step's start, where the state is
+  // known, through points each twice as far from it, each solve starting from the last.
+  const double step_start = step_end - step_psi[0];
+  Vector x = interpolate(step_start);
+  for (int halvings = kContinuationHalvings; halvings >= 0; --halvings) {
+    auto solved = solve_at(step_start + std::ldexp(t_at - step_start, -halvings), x);
+    if (!solved) return x_at;
+    x = std::move(*solved);
+  }
+  return x;
 }
 
 // Order 1 from a consistent state, as after the initial point (IDA's first step).

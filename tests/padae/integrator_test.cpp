@@ -235,6 +235,43 @@ TEST(Integrator, DenseOutputSolvesAnAlgebraicUnknownThatIsFlatInTheCharges) {
   }
 }
 
+// x' = -x beside an algebraic junction voltage 0 = exp(y / VT) - b(t), b = 1 + 1e6 sin(50 t)^2:
+// y = VT ln b swings by 14 VT several times within a step that only x sets. Between the step's
+// points the polynomial's y can be many VT below the solution, where Newton on the exponential
+// overshoots by e^(distance / VT) and then creeps back one VT per iteration: dense output then
+// continues from the step's start instead, where y is known.
+class SwingingJunction : public SemiExplicitSystem {
+ public:
+  static constexpr double kThermal = 0.025;
+  SwingingJunction() : SemiExplicitSystem({D, A}) {}
+  static double drive(double t) { return 1 + 1e6 * std::pow(std::sin(50 * t), 2); }
+  EvalStatus equations(double t, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = -z[0];
+    out[1] = std::exp(z[1] / kThermal) - drive(t);
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Integrator, DenseOutputSolvesWhereNewtonFromThePolynomialFails) {
+  SwingingJunction model;
+  Options options;
+  options.rtol = 1e-6;
+  options.atol = 1e-9;
+  Integrator integrator(model, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector{{1.0, 0.0}})) << integrator.failure().reason;
+  double worst = 0, worst_polynomial = 0;
+  ASSERT_TRUE(run_until(integrator, 2.0, [&](const StepOutcome&) {
+    for (int k = 1; k < 20; ++k) {
+      const double t_at = integrator.time() - k / 20.0 * integrator.step_size();
+      const double exact = SwingingJunction::kThermal * std::log(SwingingJunction::drive(t_at));
+      worst = std::max(worst, std::abs(integrator.dense_output(t_at)[1] - exact));
+      worst_polynomial = std::max(worst_polynomial, std::abs(integrator.interpolate(t_at)[1] - exact));
+    }
+  }));
+  EXPECT_GT(worst_polynomial, 5 * SwingingJunction::kThermal);  // the case the test is about
+  EXPECT_LT(worst, 1e-6);
+}
+
 // An index-1 DAE: x' = -y, 0 = y - x^2 (x = 1 / (1 + t)); the algebraic y is not error-tested.
 class IndexOne : public SemiExplicitSystem {
  public:

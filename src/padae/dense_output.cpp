@@ -42,6 +42,7 @@ std::optional<Vector> DenseOutput::solve(double t, const Vector& x_guess, const 
   double keep_within = kKeptMatrixDrift;  // only the first factorization may keep the one held
   bool refactor = true;
   double previous_norm = std::numeric_limits<double>::infinity();
+  previous_delta_.setZero(x.size());
   for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
     if (refactor) {
       if (newton_.factor(t, x, p, c, std::exchange(keep_within, 0.0)) != NewtonMatrix::Outcome::ok)
@@ -61,8 +62,14 @@ std::optional<Vector> DenseOutput::solve(double t, const Vector& x_guess, const 
     // corrections proves nothing (a junction's current falling back by decades in one step).
     if (norm <= kConvergedNorm) return x;
     const double rate = norm / previous_norm;
+    // Within the tolerance, no longer contracting on a fresh matrix, and turning back: the
+    // round-off floor of a tight tolerance, not a failure. A junction creeping toward its
+    // solution (one thermal voltage per iteration) keeps its direction and is not taken.
+    const double direction = delta_.cwiseProduct(inverse_weight_).dot(previous_delta_.cwiseProduct(inverse_weight_));
+    if (refactor && norm <= 1 && rate >= 0.5 && direction < 0) return x;
     refactor = rate > kRefactorRate;
     previous_norm = norm;
+    std::swap(previous_delta_, delta_);
   }
   return std::nullopt;
 }

@@ -135,11 +135,12 @@ NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Pred
   return outcome;
 }
 
-// The factorization held is of mode p and cj, and within keep_within of df/dx + cj dq/dx as
-// loaded now, entry by entry (auxiliary rows are identity rows in both).
+// The factorization held is of factor()'s form and mode p, and within keep_within of
+// df/dx + cj dq/dx as loaded now, entry by entry (auxiliary rows are identity rows in both):
+// another cj is as good as another operating point while the entries stay that close.
 bool NewtonMatrix::holds_factorization_near(const Predicates& p, double cj,
                                             double keep_within) const {
-  if (factored_cj_ != cj || factored_mode_ != p) return false;
+  if (factored_cj_ == 0 || factored_mode_ != p) return false;
   const auto& starts = pattern_.column_starts();
   const auto& rows = pattern_.row_indices();
   for (int column = 0; column < pattern_.size(); ++column)

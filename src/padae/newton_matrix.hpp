@@ -22,8 +22,8 @@ class NewtonMatrix {
   // unknowns replaced by identity rows). False with a reason when the model fails or the matrix
   // is singular.
   enum class Outcome { ok, outside_domain, singular };
-  // keep_within > 0: keeps the factorization it holds when that is of mode p and this cj and no
-  // entry of the new matrix differs from the factored one by more than keep_within of it.
+  // keep_within > 0: keeps the factorization it holds when that is of mode p and no entry of
+  // the new matrix (cj included) differs from the factored one by more than keep_within of it.
   Outcome factor(double t, const Vector& x, const Predicates& p, double cj, double keep_within = 0);
   // df/dx + shift I: pseudo-transient continuation toward a steady state.
   Outcome factor_shifted(double t, const Vector& x, const Predicates& p, double shift);
@@ -34,7 +34,6 @@ class NewtonMatrix {
 
   void solve(Vector& b) const { lu_.solve(b); }
   const Load& load() const { return load_; }
-  const Vector& typical() const { return typical_; }
   // |dq/dx| summed into row weights: sum_j |dq_ij/dx_j| * scale_j (zero for algebraic rows).
   void charge_scale(const Vector& scale, Vector& out) const;
   // Zeroes the entries of v on algebraic rows (no dq/dx in the last factorization).

@@ -764,22 +764,24 @@ Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
   // stays within kMaxStiffening of its value at the step's end, where q is pinned to S within
   // a thousandth of the step's residual anyway.
   const double c_max = kMaxStiffening * c_at(step_end);
-  auto solve_at = [&](double t_of, const Vector& guess) {
-    return solver.solve(t_of, guess, interpolate(t_of), interpolate(t_of, Interpolated::value, Quantity::q),
+  // Newton from guess, or from the polynomial's x without one.
+  auto solve_at = [&](double t_of, const Vector* guess) {
+    const Vector x_polynomial = interpolate(t_of);
+    return solver.solve(t_of, guess ? *guess : x_polynomial, x_polynomial,
+                        interpolate(t_of, Interpolated::value, Quantity::q),
                         interpolate(t_of, Interpolated::derivative, Quantity::q), step_mode,
                         std::min(c_at(t_of), c_max));
   };
-  Vector x_at = interpolate(t_at);
-  if (step_order == 0) return x_at;
-  if (auto solved = solve_at(t_at, x_at)) return std::move(*solved);
+  if (step_order == 0) return interpolate(t_at);
+  if (auto solved = solve_at(t_at, nullptr)) return std::move(*solved);
   // Newton from the polynomial can fail where it is far from the solution (the common mode of
   // a load floating between junctions): continuation from the step's start, where the state is
   // known, through points each twice as far from it, each solve starting from the last.
   const double step_start = step_end - step_psi[0];
   Vector x = interpolate(step_start);
   for (int halvings = kContinuationHalvings; halvings >= 0; --halvings) {
-    auto solved = solve_at(step_start + std::ldexp(t_at - step_start, -halvings), x);
-    if (!solved) return x_at;
+    auto solved = solve_at(step_start + std::ldexp(t_at - step_start, -halvings), &x);
+    if (!solved) return interpolate(t_at);
     x = std::move(*solved);
   }
   return x;

@@ -43,6 +43,10 @@ constexpr int kMaxErrorTestFailures = 10;
 constexpr int kMaxNewtonFailures = 10;
 constexpr int kStepsBetweenJacobians = 20;
 constexpr double kJacobianCjChange = 0.25;  // refactor when cj moved by more than this fraction
+// The first step after a restart is backward Euler, whose error h^2 q''/2 has one sign at every
+// restart of a periodic circuit and so adds up over the periods: it is held to a hundredth of
+// the tolerance (h^2 |q''| <= 1e-2) instead of IDA's half.
+constexpr double kRestartCurvatureStep = 1e-2;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 // Zeno behaviour: this many consecutive event intervals, each shrinking by this ratio or more,
 // are taken as events accumulating toward a finite time.
@@ -165,6 +169,10 @@ struct Integrator::Impl {
   bool startup_phase = true;
   int steps_since_restart = 0;
   double h = 0, h_used = 0, cj = 0, error_coefficient = 0;
+  // The step the error control chose for the last step, before it was shortened to end on a
+  // source corner or a stop: a restart there starts from it (the shortened step says nothing
+  // about the motion).
+  double h_planned = 0;
   Vector q_derivative;  // q' at t, as the last corrector (or the restart) gave it: the trapezoidal history
 
   // Newton matrix bookkeeping (modified Newton with reuse).
@@ -397,9 +405,12 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
   if (order_new == order - 1 || order == options.max_order) startup_phase = false;
 
   const double h_max = options.max_step > 0 ? options.max_step : std::numeric_limits<double>::infinity();
+  // IDA's start-up: raise the order and double the step until a step fails or the order
+  // drops (the first step's size came from an estimate, so it is kept once). It also ends
+  // where the error estimate forbids doubling even at this order: that step would fail.
+  if (startup_phase && steps_since_restart > 0 && std::pow(2 * error_k + 1e-4, -1.0 / (order + 1)) < 2)
+    startup_phase = false;
   if (startup_phase) {
-    // IDA's start-up: raise the order and double the step until a step fails or the order
-    // drops (the first step's size came from an estimate, so it is kept once).
     if (++steps_since_restart > 1) {
       order = std::min(order + 1, options.max_order);
       h = std::min(2 * h, h_max);
@@ -463,6 +474,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
   bool ends_at_target = false;
   for (;;) {
     if (options.max_step > 0) h = std::min(h, options.max_step);
+    h_planned = h;
     ends_at_target = t + h >= target || t + 1.0001 * h >= target;
     if (ends_at_target) h = target - t;
     if (h < minimum_step() && !ends_at_target) {
@@ -796,17 +808,17 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   next_time_event = system.next_time_event(t);
   if (predicate_count > 0) evaluate_guards(t, x, guards_now);
   update_weights();
-  double h_new = h > 0 ? h : (options.initial_step > 0 ? options.initial_step : 1e-3 * options.time_scale);
+  double h_new = h > 0 ? std::max(h, h_planned) : (options.initial_step > 0 ? options.initial_step : 1e-3 * options.time_scale);
   if (h <= 0 && options.initial_step <= 0) {
     // IDA's initial step: the first-order change over the step is at most half a tolerance.
     double rate = weighted_norm(consistent.q_derivative, inverse_weight_q, options.norm);
     if (h_new * rate > 0.5) h_new = 0.5 / rate;
   }
-  // Order 1's local error, h^2 q'' / 2, within half a tolerance (unless the caller chose the
-  // initial step): after an event the previous step may be far too long for a fast mode the
-  // new motion starts with.
+  // Order 1's local error, h^2 q'' / 2, bounded (unless the caller chose the initial step):
+  // the new motion's curvature sets the first step, the previous step only caps it.
   double curvature = weighted_norm(consistent.q_second_derivative, inverse_weight_q, options.norm);
-  if ((h > 0 || options.initial_step <= 0) && h_new * h_new * curvature > 1) h_new = 1 / std::sqrt(curvature);
+  if ((h > 0 || options.initial_step <= 0) && h_new * h_new * curvature > kRestartCurvatureStep)
+    h_new = std::sqrt(kRestartCurvatureStep / curvature);
   if (options.max_step > 0) h_new = std::min(h_new, options.max_step);
   h_new = std::max(h_new, minimum_step());
   h = h_new;

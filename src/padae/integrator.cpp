@@ -78,6 +78,12 @@ std::string format_time(double t) {
   return text.str();
 }
 
+// IDA's step ratio: the step that brings a local error estimate of order error_order to half
+// the tolerance, relative to the one that made it.
+double step_ratio(double error_estimate, int error_order) {
+  return std::pow(2 * error_estimate + 1e-4, -1.0 / (error_order + 1));
+}
+
 }  // namespace
 
 struct Integrator::Impl {
@@ -389,9 +395,9 @@ bool Integrator::Impl::error_test(double& error_k, double& error_k_minus_1, int&
   return error_coefficient * norm_k <= 1.0;
 }
 
-// IDA's step ratio for the next step from the local error estimate of order error_order.
+// The next step from the local error estimate of order error_order.
 void Integrator::Impl::choose_step(double error_estimate, int error_order, double h_max) {
-  double ratio = std::pow(2 * error_estimate + 1e-4, -1.0 / (error_order + 1));
+  const double ratio = step_ratio(error_estimate, error_order);
   if (ratio >= 2) h = std::min(2 * h, h_max);
   else if (ratio <= 1) h *= std::clamp(ratio, 0.5, 0.9);
 }
@@ -408,7 +414,7 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
   // IDA's start-up: raise the order and double the step until a step fails or the order
   // drops (the first step's size came from an estimate, so it is kept once). It also ends
   // where the error estimate forbids doubling even at this order: that step would fail.
-  if (startup_phase && steps_since_restart > 0 && std::pow(2 * error_k + 1e-4, -1.0 / (order + 1)) < 2)
+  if (startup_phase && steps_since_restart > 0 && step_ratio(error_k, order) < 2)
     startup_phase = false;
   if (startup_phase) {
     if (++steps_since_restart > 1) {
@@ -529,7 +535,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       double error_new = order_new == order ? error_k : error_k_minus_1;
       order = order_new;
       if (error_test_failures == 1) {
-        double ratio = 0.9 * std::pow(2 * error_new + 1e-4, -1.0 / (order + 1));
+        double ratio = 0.9 * step_ratio(error_new, order);
         h *= std::clamp(ratio, 0.25, 0.9);
       } else {
         if (error_test_failures > 2) order = 1;

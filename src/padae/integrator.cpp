@@ -46,7 +46,7 @@ constexpr double kJacobianCjChange = 0.25;  // refactor when cj moved by more th
 // The first step after a restart is backward Euler, whose error h^2 q''/2 has one sign at every
 // restart of a periodic circuit and so adds up over the periods: it is held to a hundredth of
 // the tolerance (h^2 |q''| <= 1e-2) instead of IDA's half.
-constexpr double kRestartCurvatureStep = 1e-2;
+constexpr double kRestartCurvatureBound = 1e-2;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 // Zeno behaviour: this many consecutive event intervals, each shrinking by this ratio or more,
 // are taken as events accumulating toward a finite time.
@@ -823,8 +823,8 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   // Order 1's local error, h^2 q'' / 2, bounded (unless the caller chose the initial step):
   // the new motion's curvature sets the first step, the previous step only caps it.
   double curvature = weighted_norm(consistent.q_second_derivative, inverse_weight_q, options.norm);
-  if ((h > 0 || options.initial_step <= 0) && h_new * h_new * curvature > kRestartCurvatureStep)
-    h_new = std::sqrt(kRestartCurvatureStep / curvature);
+  if ((h > 0 || options.initial_step <= 0) && h_new * h_new * curvature > kRestartCurvatureBound)
+    h_new = std::sqrt(kRestartCurvatureBound / curvature);
   if (options.max_step > 0) h_new = std::min(h_new, options.max_step);
   h_new = std::max(h_new, minimum_step());
   h = h_new;

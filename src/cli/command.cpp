@@ -323,7 +323,7 @@ class Session {
           case padae::StepKind::failed:
             return fail(integrator_->failure().t, integrator_->failure().reason, integrator_->failure().unknown);
           case padae::StepKind::event: {
-            if (options_.grid) emit_grid(t_before, outcome.t);
+            emit_inside(t_before, outcome.t);
             // Two rows at a discontinuity: the state just before and just after it.
             const padae::EventRecord& event = integrator_->last_event();
             if (waveforms_.differ(event.x_before, integrator_->state())) emit(outcome.t, event.x_before);
@@ -334,7 +334,7 @@ class Session {
           case padae::StepKind::accepted:
           case padae::StepKind::time_event:
           case padae::StepKind::stop:
-            if (options_.grid) emit_grid(t_before, outcome.t);
+            emit_inside(t_before, outcome.t);
             emit(outcome.t, integrator_->state());
             break;
         }
@@ -380,12 +380,22 @@ class Session {
   void emit(double t, const mna::Vector& x) {
     if (t >= tstart_) waveforms_.row(t, x);
   }
-  // --grid: rows at TSTART + k TSTEP strictly inside the last step (also one that ended at an
-  // event or a source corner), from its dense output.
-  void emit_grid(double t_before, double t_after) {
-    auto point = [&](long k) { return tstart_ + static_cast<double>(k) * settings_.tstep; };
-    while (point(next_grid_) <= t_before) ++next_grid_;
-    for (; point(next_grid_) < t_after; ++next_grid_) emit(point(next_grid_), integrator_->dense_output(point(next_grid_)));
+  // Rows strictly inside the last step (also one that ended at an event), in time order, from
+  // its dense output: at the source corners it passed (a corner that cannot bend the solution,
+  // a gate drive's, does not end a step, but its waveform keeps the corner) and, with --grid, at
+  // TSTART + k TSTEP.
+  void emit_inside(double t_before, double t_after) {
+    auto grid_point = [&](long k) {
+      return options_.grid ? tstart_ + static_cast<double>(k) * settings_.tstep : mna::infinity;
+    };
+    while (grid_point(next_grid_) <= t_before) ++next_grid_;
+    for (double corner = model_->next_time_event(t_before);;) {
+      const double t_row = std::min(corner, grid_point(next_grid_));
+      if (t_row >= t_after) break;
+      emit(t_row, integrator_->dense_output(t_row));
+      if (t_row == corner) corner = model_->next_time_event(corner);
+      if (t_row == grid_point(next_grid_)) ++next_grid_;
+    }
   }
 
   const CommandOptions& options_;

@@ -202,6 +202,14 @@ double Model::next_time_event(double t) const {
   return next;
 }
 
+bool Model::time_event_rows(double t, std::vector<int>& rows) const {
+  const double corner = next_time_event(t);
+  if (corner == infinity) return true;
+  for (const auto& d : devices_)
+    if (d->next_time_event(t) == corner) d->forcing_rows(rows);
+  return true;
+}
+
 double Model::resolution_step() const {
   double step = infinity;
   for (const auto& d : devices_) step = std::min(step, d->resolution_step());

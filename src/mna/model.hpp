@@ -35,6 +35,7 @@ class Model final : public padae::System {
   void jump_matrix(double t, const Vector& x, const padae::Predicates& p,
                    std::vector<padae::JumpEntry>& out) const override;
   double next_time_event(double t) const override;
+  bool time_event_rows(double t, std::vector<int>& rows) const override;
   double absolute_tolerance(int unknown, double default_atol) const override;
 
   // The longest step that resolves every source's time dependence (a bound for

@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <optional>
 #include <sstream>
 
@@ -116,7 +117,10 @@ struct Integrator::Impl {
 
   // --- events ----------------------------------------------------------------------------
   bool evaluate_guards(double t_at, const Vector& x_at, Vector& out) const;
-  StepOutcome handle_state_event(double t_old, const Vector& guards_old);
+  bool crossed(const Vector& guards) const;
+  DenseOutput& locator();
+  StepOutcome handle_state_event(double t_left, const Vector& guards_left, double t_right,
+                                 const Vector& guards_right);
   bool settle(double t_at, const Vector& x_start, const Predicates& target,
               bool record_flips);
   void restart(double t_at, const ConsistentState& consistent);
@@ -146,7 +150,14 @@ struct Integrator::Impl {
   Predicates p;
   Predicates step_predicates;  // p during the current step (an event inside it changes p)
   Vector guards_now;  // guards at (t, x)
-  double next_time_event = std::numeric_limits<double>::infinity();
+  double next_time_event = std::numeric_limits<double>::infinity();  // the first corner after t
+  // Per row: whether a corner in its forcing can bend the solution, i.e. the row shares a block
+  // of the pattern with a differential unknown. A step ends on such a corner and passes the
+  // others, whose sources only reach algebraic unknowns (exact at any instant).
+  std::vector<char> row_bends_solution;
+  std::vector<int> corner_rows;
+  bool corner_bends(double t_from);
+  double first_bending_corner(double t_limit);
   EventRecord last_event;
   Failure failure{0, "", -1};
   double last_event_time = -std::numeric_limits<double>::infinity();
@@ -207,6 +218,37 @@ Integrator::Impl::Impl(System& system_in, Options options_in)
   options.max_order = std::clamp(options.max_order, 1, options.method == Method::trapezoidal ? 2 : kMaxOrder);
   for (auto& v : phi_x) v.setZero(n);
   for (auto& v : phi_q) v.setZero(n);
+
+  // The blocks of the pattern: rows (0 .. n-1) and columns (n .. 2n-1) joined by every entry.
+  std::vector<int> parent(2 * static_cast<std::size_t>(n));
+  std::iota(parent.begin(), parent.end(), 0);
+  auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  const Pattern& pattern = system.pattern();
+  for (int column = 0; column < n; ++column)
+    for (int k = pattern.column_starts()[column]; k < pattern.column_starts()[column + 1]; ++k)
+      parent[root(pattern.row_indices()[k])] = root(n + column);
+  std::vector<char> block_is_dynamic(parent.size(), 0);
+  for (int column = 0; column < n; ++column)
+    if (system.kind(column) == UnknownKind::differential) block_is_dynamic[root(n + column)] = 1;
+  row_bends_solution.resize(n);
+  for (int row = 0; row < n; ++row) row_bends_solution[row] = block_is_dynamic[root(row)];
+}
+
+// Whether the corner next_time_event(t_from) can bend the solution (if unsure, it can).
+bool Integrator::Impl::corner_bends(double t_from) {
+  corner_rows.clear();
+  if (!system.time_event_rows(t_from, corner_rows)) return true;
+  return std::any_of(corner_rows.begin(), corner_rows.end(), [&](int row) { return row_bends_solution[row] != 0; });
+}
+
+// The first corner after t that bends the solution, among those up to t_limit; else +inf.
+double Integrator::Impl::first_bending_corner(double t_limit) {
+  for (double from = t, corner = next_time_event; corner <= t_limit; from = corner, corner = system.next_time_event(corner))
+    if (corner_bends(from)) return corner;
+  return std::numeric_limits<double>::infinity();
 }
 
 // Below this a step no longer advances t reliably.
@@ -468,7 +510,6 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
 
 StepOutcome Integrator::Impl::step(double t_stop) {
   if (!(t_stop > t)) return fail(t, "step() called with t_stop " + format_time(t_stop) + " not after t = " + format_time(t));
-  const double target = std::min(t_stop, next_time_event);
   const double t_old = t;
   step_predicates = p;
   const Vector guards_old = guards_now;
@@ -478,9 +519,12 @@ StepOutcome Integrator::Impl::step(double t_stop) {
   double error_k = 0, error_k_minus_1 = 0;
   int order_new = order;
   bool ends_at_target = false;
+  double corner = 0, target = t_stop;
   for (;;) {
     if (options.max_step > 0) h = std::min(h, options.max_step);
     h_planned = h;
+    corner = first_bending_corner(std::min(t_stop, t + 1.0001 * h));
+    target = std::min(t_stop, corner);
     ends_at_target = t + h >= target || t + 1.0001 * h >= target;
     if (ends_at_target) h = target - t;
     if (h < minimum_step() && !ends_at_target) {
@@ -554,16 +598,23 @@ StepOutcome Integrator::Impl::step(double t_stop) {
   if (predicate_count > 0) {
     Vector guards_new(predicate_count);
     if (!evaluate_guards(t, x, guards_new)) return fail(t, "a guard function cannot be evaluated at t = " + format_time(t));
-    bool crossed = false;
-    for (int k = 0; k < predicate_count; ++k) crossed |= (guards_new[k] > 0) != (p[k] != 0);
-    if (crossed) {
-      guards_now = guards_new;
-      return handle_state_event(t_old, guards_old);
+    // A corner the step passed can still bend a guard (the ramp of a gate drive): the guards
+    // are sampled there too, and the first crossing is located between samples.
+    double t_left = t_old;
+    Vector guards_left = guards_old;
+    for (double passed = next_time_event; passed < t; passed = system.next_time_event(passed)) {
+      Vector guards_passed(predicate_count);
+      if (!evaluate_guards(passed, step_solution(locator(), passed), guards_passed))
+        return fail(passed, "a guard function cannot be evaluated at t = " + format_time(passed));
+      if (crossed(guards_passed)) return handle_state_event(t_left, guards_left, passed, guards_passed);
+      t_left = passed;
+      guards_left = std::move(guards_passed);
     }
+    if (crossed(guards_new)) return handle_state_event(t_left, guards_left, t, guards_new);
     guards_now = guards_new;
   }
 
-  if (ends_at_target && target == next_time_event) {
+  if (ends_at_target && target == corner) {
     ++statistics.time_events;
     // At a source corner the derivatives are discontinuous, and the source itself may jump
     // (a sawtooth's reset): the event procedure makes the state consistent on the right side
@@ -577,6 +628,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     }
     return {t == t_stop ? StepKind::stop : StepKind::time_event, t};
   }
+  while (next_time_event <= t) next_time_event = system.next_time_event(next_time_event);
   if (ends_at_target) return {StepKind::stop, t};
   return {StepKind::accepted, t};
 }
@@ -586,18 +638,30 @@ bool Integrator::Impl::evaluate_guards(double t_at, const Vector& x_at, Vector& 
   return system.guards(t_at, x_at, out) == EvalStatus::ok;
 }
 
-StepOutcome Integrator::Impl::handle_state_event(double t_old, const Vector& guards_old) {
+bool Integrator::Impl::crossed(const Vector& guards) const {
+  for (int k = 0; k < predicate_count; ++k)
+    if ((guards[k] > 0) != (p[k] != 0)) return true;
+  return false;
+}
+
+DenseOutput& Integrator::Impl::locator() {
+  if (!location_solver) location_solver = std::make_unique<DenseOutput>(system, statistics, options, absolute_tolerance);
+  return *location_solver;
+}
+
+// The step's end holds the guards found at t_right (the step's end or a corner it passed).
+StepOutcome Integrator::Impl::handle_state_event(double t_left, const Vector& guards_left, double t_right,
+                                                 const Vector& guards_right) {
   // Locate the earliest crossing on the solution inside the step: on the interpolating
   // polynomial itself an algebraic unknown (a source's node) is off by the polynomial's error,
   // and a guard on it crosses early or late.
-  if (!location_solver) location_solver = std::make_unique<DenseOutput>(system, statistics, options, absolute_tolerance);
-  auto guards_at = [&](double t_at, Vector& out) { return evaluate_guards(t_at, step_solution(*location_solver, t_at), out); };
-  const double tolerance = 100 * kEps * (std::abs(t) + std::abs(h_used));
-  Crossing crossing = locate_first_crossing(guards_at, p, t_old, guards_old, t, guards_now, tolerance);
+  auto guards_at = [&](double t_at, Vector& out) { return evaluate_guards(t_at, step_solution(locator(), t_at), out); };
+  const double tolerance = 100 * kEps * (std::abs(t_right) + std::abs(h_used));
+  Crossing crossing = locate_first_crossing(guards_at, p, t_left, guards_left, t_right, guards_right, tolerance);
   if (!crossing.ok) return fail(t, "a guard function cannot be evaluated while locating an event near t = " + format_time(t));
 
   const double t_event = crossing.t_right;
-  const Vector x_before = step_solution(*location_solver, t_event);
+  const Vector x_before = step_solution(locator(), t_event);
   Predicates target = p;
   for (int k = 0; k < predicate_count; ++k) target[k] = crossing.guards_right[k] > 0;
   // Accumulation (Zeno): events closer than the time resolution, or intervals shrinking

@@ -85,10 +85,19 @@ class System {
   }
 
   // Time events known in advance (source corners): the first one strictly after t, or +inf.
-  // The integrator ends a step exactly there and restarts at order 1.
+  // The integrator ends a step exactly there and restarts at order 1, unless the corner cannot
+  // bend the solution (see time_event_rows).
   virtual double next_time_event(double t) const {
     (void)t;
     return std::numeric_limits<double>::infinity();
+  }
+  // The rows whose time dependence has the corner next_time_event(t), appended to `rows`; false
+  // when not known. Rows that share no block of the pattern with a differential unknown (a gate
+  // drive read only by guards) cannot bend the solution: the integrator steps across such a
+  // corner and only samples the guards there.
+  virtual bool time_event_rows(double t, std::vector<int>& rows) const {
+    (void)t, (void)rows;
+    return false;
   }
 
   // Unknown scale for the tolerance: the absolute tolerance of unknown i in its own units.

@@ -197,6 +197,42 @@ TEST_F(Cli, OpeningIdealSwitchHandsTheInductorCurrentToTheFreewheelingDiode) {
   }
 }
 
+TEST_F(Cli, GateDriveCornersAreRowsButEndNoStep) {
+  // The pulse only drives the switch's guard: its corners (1, 1.01, 1.5 and 1.51 ms) cannot bend
+  // the solution, so no step ends there, but the waveform keeps them as rows. The switch closes
+  // at 1.005 ms and opens at 1.505 ms; v(out) charges towards 0.5 V with tau = 0.5 ms while it is
+  // closed and decays with tau = 1 ms after.
+  const std::string events = path("events.csv");
+  const Result r = run(write("gate.cir",
+                             "* gate drive\nVin in 0 1\nVdrv drv 0 PULSE(0 1 1m 10u 10u 490u 2m)\n"
+                             "S1 in a drv 0 sw\nR1 a out 1k\nR2 out 0 1k\nC1 out 0 1u\n"
+                             ".model sw SW(ideal=1 vt=0.5)\n.options vntol=1e-12\n.tran 10u 2.5m uic\n.end\n") +
+                       " --probe 'v(drv),v(out)' --events " + events + " --rtol 1e-8 --stats -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("\"time_events\": 0,"), std::string::npos) << r.err;
+  const Csv log = parse_csv(read(events));
+  ASSERT_EQ(log.rows.size(), 2u);
+  const double t_close = 1.005e-3, t_open = 1.505e-3;
+  EXPECT_NEAR(log.rows[0][0], t_close, 1e-15);
+  EXPECT_NEAR(log.rows[1][0], t_open, 1e-15);
+  const double v_open = 0.5 * (1 - std::exp(-(t_open - t_close) / 0.5e-3));
+  const Csv csv = parse_csv(r.out);
+  int corners = 0;
+  for (const auto& row : csv.rows) {
+    const double t = row[0];
+    for (double corner : {1e-3, 1.01e-3, 1.5e-3, 1.51e-3})
+      if (std::abs(t - corner) < 1e-15) {
+        ++corners;
+        EXPECT_NEAR(row[1], corner == 1e-3 || corner == 1.51e-3 ? 0.0 : 1.0, 1e-12) << "t = " << t;
+      }
+    const double expected = t <= t_close  ? 0.0
+                            : t <= t_open ? 0.5 * (1 - std::exp(-(t - t_close) / 0.5e-3))
+                                          : v_open * std::exp(-(t - t_open) / 1e-3);
+    EXPECT_NEAR(row[2], expected, 1e-7) << "t = " << t;
+  }
+  EXPECT_EQ(corners, 4);
+}
+
 TEST_F(Cli, BadInputExitsWithTwo) {
   EXPECT_EQ(run(path("missing.cir")).exit_code, 2);
   EXPECT_EQ(run("").exit_code, 2);

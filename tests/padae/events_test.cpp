@@ -2,8 +2,11 @@
 // jump that flips a further predicate, and chattering that must be diagnosed, not looped on.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <vector>
 
 #include "padae/integrator.hpp"
 #include "padae/semi_explicit.hpp"
@@ -14,6 +17,7 @@ namespace {
 
 using testing::run_until;
 constexpr auto D = UnknownKind::differential;
+constexpr auto A = UnknownKind::algebraic;
 constexpr auto X = UnknownKind::auxiliary;
 
 // x' = (p | 2 | 1), p = (x > 0): the slope doubles when x crosses zero upward.
@@ -163,6 +167,68 @@ TEST(Events, ChatteringIsDiagnosedWithTimeAndPredicate) {
   EXPECT_NEAR(integrator.failure().t, 1.0, 1e-9);
   EXPECT_NE(integrator.failure().reason.find("chattering"), std::string::npos) << integrator.failure().reason;
   EXPECT_NE(integrator.failure().reason.find("predicates 0"), std::string::npos) << integrator.failure().reason;
+}
+
+// A gate drive read only by a guard: the algebraic g = pulse(t), a trapezoid with corners at
+// 1.1, 1.11, 1.13 and 1.14 (0 -> 1 -> 0), and the counter x' = p, p = (g > 0.5), which runs from
+// 1.105 to 1.135. g's row shares no block of the pattern with x, so its corners cannot bend the
+// solution; with forcing_row = 0 the same corners are declared to enter x's row instead.
+class GateDrivenCounter : public SemiExplicitSystem {
+ public:
+  explicit GateDrivenCounter(int forcing_row)
+      : SemiExplicitSystem({D, A}, {{0, 0}, {1, 1}}), forcing_row_(forcing_row) {}
+  EvalStatus equations(double t, const Vector& z, const Predicates& p, Vector& out) override {
+    out[0] = p[0] ? 1.0 : 0.0;
+    out[1] = z[1] - pulse(t);
+    return EvalStatus::ok;
+  }
+  int predicate_count() const override { return 1; }
+  EvalStatus guards(double, const Vector& z, Vector& out) const override {
+    out[0] = z[1] - 0.5;
+    return EvalStatus::ok;
+  }
+  double next_time_event(double t) const override {
+    for (double corner : kCorners)
+      if (corner > t) return corner;
+    return std::numeric_limits<double>::infinity();
+  }
+  bool time_event_rows(double, std::vector<int>& rows) const override {
+    rows.push_back(forcing_row_);
+    return true;
+  }
+
+ private:
+  static constexpr double kCorners[] = {1.1, 1.11, 1.13, 1.14};
+  static double pulse(double t) {
+    if (t <= 1.1 || t >= 1.14) return 0;
+    if (t < 1.11) return (t - 1.1) / 0.01;
+    return t <= 1.13 ? 1.0 : (1.14 - t) / 0.01;
+  }
+  int forcing_row_;
+};
+
+TEST(Events, StepsPassCornersThatCannotBendTheSolutionAndSampleTheGuardsThere) {
+  for (int forcing_row : {1, 0}) {
+    GateDrivenCounter model(forcing_row);
+    Integrator integrator(model, precise());
+    ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(2))) << integrator.failure().reason;
+    std::vector<double> event_times;
+    double longest_step = 0;
+    ASSERT_TRUE(run_until(integrator, 2.0, [&](const StepOutcome& outcome) {
+      if (outcome.kind == StepKind::event) event_times.push_back(outcome.t);
+      longest_step = std::max(longest_step, integrator.step_size());
+    })) << integrator.failure().reason;
+    ASSERT_EQ(event_times.size(), 2u) << "forcing row " << forcing_row;
+    EXPECT_NEAR(event_times[0], 1.105, 1e-12);
+    EXPECT_NEAR(event_times[1], 1.135, 1e-12);
+    EXPECT_NEAR(integrator.state()[0], 0.03, 1e-10);
+    // Passed, a corner ends no step: a step spans the whole 40 ms pulse, found by the guards
+    // sampled at its corners.
+    EXPECT_EQ(integrator.statistics().time_events, forcing_row == 1 ? 0 : 4);
+    if (forcing_row == 1) {
+      EXPECT_GT(longest_step, 0.5);
+    }
+  }
 }
 
 // Without predicates no guard is ever evaluated; without jumps no jump matrix is asked for.

@@ -19,6 +19,10 @@ class CurrentSource final : public Device {
   }
   void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::current_defined, name()}); }
   double next_time_event(double t) const override { return function_.next_corner(t); }
+  void forcing_rows(std::vector<int>& out) const override {
+    for (int node : {a_, b_})
+      if (node != ground) out.push_back(node);
+  }
   double resolution_step() const override { return function_.resolution_step(); }
 
  private:

@@ -63,7 +63,7 @@ struct Statistics {
   long jacobians = 0;
   long lu_factorizations = 0;
   long events = 0;                 // state events (predicate flips) handled
-  long time_events = 0;
+  long time_events = 0;            // source corners a step ended on (passed ones not counted)
   long jumps = 0;                  // events at which the state jumped
 };
 

@@ -162,7 +162,8 @@ class Device {
   virtual void initial_auxiliaries(Vector& x0) const { (void)x0; }
 
   virtual double next_time_event(double t) const { (void)t; return infinity; }
-  // The rows the device's time dependence enters (appended): where its corners act.
+  // The rows the device's time dependence enters (appended): where its corners act. A device
+  // with time events that lists none has its corners end the step (the safe side).
   virtual void forcing_rows(std::vector<int>& out) const { (void)out; }
   // The longest integration step that still resolves this device's own time dependence.
   virtual double resolution_step() const { return infinity; }

@@ -205,8 +205,12 @@ double Model::next_time_event(double t) const {
 bool Model::time_event_rows(double t, std::vector<int>& rows) const {
   const double corner = next_time_event(t);
   if (corner == infinity) return true;
-  for (const auto& d : devices_)
-    if (d->next_time_event(t) == corner) d->forcing_rows(rows);
+  for (const auto& d : devices_) {
+    if (d->next_time_event(t) != corner) continue;
+    const std::size_t before = rows.size();
+    d->forcing_rows(rows);
+    if (rows.size() == before) return false;  // not said where it acts: the corner may bend anything
+  }
   return true;
 }
 

@@ -3,8 +3,26 @@
 #include <klu.h>
 
 #include <stdexcept>
+#include <vector>
 
 namespace padae {
+
+namespace {
+
+// +1 for an even permutation, -1 for an odd one: (-1)^(n - number of cycles).
+int permutation_sign(const int* permutation, int n) {
+  std::vector<char> seen(static_cast<std::size_t>(n), 0);
+  int sign = 1;
+  for (int start = 0; start < n; ++start) {
+    if (seen[start]) continue;
+    int length = 0;
+    for (int i = start; !seen[i]; i = permutation[i]) seen[i] = 1, ++length;
+    if (length % 2 == 0) sign = -sign;
+  }
+  return sign;
+}
+
+}  // namespace
 
 struct SparseLu::KluState {
   klu_common common;
@@ -60,6 +78,18 @@ bool SparseLu::factor(const std::vector<double>& values) {
   klu_rcond(klu_->symbolic, klu_->numeric, &klu_->common);
   klu_->pivoted_rcond = klu_->common.rcond;
   return true;
+}
+
+// KLU factors P (R^-1 A) Q = L U + F: R a positive row scaling, L unit lower triangular, F
+// the off-diagonal blocks (strictly block upper triangular, so no part of the determinant).
+int SparseLu::determinant_sign() const {
+  if (!klu_->numeric) throw std::logic_error("SparseLu::determinant_sign before a successful factor");
+  const int n = pattern_.size();
+  const auto* u_diagonal = static_cast<const double*>(klu_->numeric->Udiag);
+  int sign = permutation_sign(klu_->numeric->Pnum, n) * permutation_sign(klu_->symbolic->Q, n);
+  for (int k = 0; k < n; ++k)
+    if (u_diagonal[k] < 0) sign = -sign;
+  return sign;
 }
 
 void SparseLu::solve(Vector& b) const {

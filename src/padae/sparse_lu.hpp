@@ -22,6 +22,8 @@ class SparseLu {
   // Solves A z = b in place.
   void solve(Vector& b) const;
   int singular_column() const { return singular_column_; }
+  // The sign (+1 or -1) of the determinant of the matrix last factored.
+  int determinant_sign() const;
 
  private:
   void release_numeric();

@@ -49,6 +49,42 @@ TEST(SparseLu, SolvesAgainstDenseLuAndRefactorsWithNewValues) {
   }
 }
 
+// Random sparse matrices, reducible (a lower-triangular coupling makes several diagonal blocks)
+// and with diagonals of either sign, so that pivoting and the block order both permute.
+TEST(SparseLu, DeterminantSignAgreesWithDenseLu) {
+  const int n = 30;
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  std::uniform_int_distribution<int> any_row(0, n - 1);
+  std::vector<std::pair<int, int>> entries;
+  for (int column = 0; column < n; ++column) {
+    entries.emplace_back(any_row(random), column);
+    const int below = column + 1 + any_row(random) % 3;
+    if (below < n) entries.emplace_back(below, column);
+    if (column % 5 != 4) entries.emplace_back(column, column + 1 < n ? column + 1 : 0);
+  }
+  Pattern pattern(n, entries);
+  SparseLu lu(pattern);
+  int negative = 0, compared = 0;
+  for (int round = 0; round < 40; ++round) {
+    std::vector<double> values(static_cast<std::size_t>(pattern.nonzeros()));
+    Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(n, n);
+    for (int column = 0; column < n; ++column)
+      for (int k = pattern.column_starts()[column]; k < pattern.column_starts()[column + 1]; ++k) {
+        values[k] = uniform(random);
+        dense(pattern.row_indices()[k], column) = values[k];
+      }
+    const double determinant = dense.fullPivLu().determinant();
+    if (!lu.factor(values) || std::abs(determinant) < 1e-12) continue;
+    ++compared;
+    negative += determinant < 0;
+    EXPECT_EQ(lu.determinant_sign(), determinant > 0 ? 1 : -1) << "round " << round;
+  }
+  EXPECT_GT(compared, 30);
+  EXPECT_GT(negative, 5);
+  EXPECT_LT(negative, compared - 5);
+}
+
 TEST(SparseLu, ReportsASingularColumn) {
   // Column 1 is all zero: no pivot can be found there.
   std::vector<std::pair<int, int>> entries{{0, 1}, {1, 0}};

@@ -41,7 +41,7 @@ class DenseOutput {
   NewtonMatrix newton_;    // kept from row to row while it stays close to the matrix at x
   const Options& options_;
   const Vector& absolute_tolerance_;
-  Vector delta_, previous_delta_, inverse_weight_;
+  Vector residual_, delta_, inverse_weight_;
 };
 
 }  // namespace padae

@@ -6,7 +6,12 @@
 // A step reads: choose h -> set coefficients -> predict -> correct (modified Newton) ->
 // error test -> accept (complete step, choose order and h) or reject (restore, shrink) ->
 // look for predicate changes in the step -> handle an event (locate, jump, re-initialize,
-// restart at order 1).
+// restart).
+//
+// A (re)start has one point and its derivative q' (from the re-initialization): the first step
+// is the trapezoidal rule, and the quadratic through both points with the slope at the second
+// lets the BDF go on at order 2 (backward Euler, IDA's start, makes a first-order error h^2 q''/2
+// of one sign at every restart of a periodic circuit, which adds up over the periods).
 //
 // The trapezoidal method shares all of it but the corrector of its order-2 steps: the same
 // history predicts (its polynomial through the last three points), the corrector is
@@ -22,6 +27,7 @@
 #include <optional>
 #include <sstream>
 
+#include "padae/damped_newton.hpp"
 #include "padae/dense_output.hpp"
 #include "padae/newton_matrix.hpp"
 #include "padae/norms.hpp"
@@ -35,8 +41,9 @@ namespace {
 constexpr int kMaxOrder = 5;
 constexpr int kHistory = kMaxOrder + 2;
 constexpr int kMaxNewtonIterations = 4;
-// Exponential device equations (junctions) far from their solution need many full Newton
-// steps; tried when modified Newton fails with a fresh matrix, before the step is cut.
+// Exponential device equations (junctions) far from their solution need many damped Newton
+// steps (damped_newton.hpp); tried when modified Newton fails with a fresh matrix, before the
+// step is cut.
 constexpr int kMaxFullNewtonIterations = 30;
 constexpr double kNewtonTolerance = 0.33;   // of the error-test tolerance (IDA's epcon)
 constexpr double kMaxConvergenceRate = 0.9;
@@ -44,10 +51,9 @@ constexpr int kMaxErrorTestFailures = 10;
 constexpr int kMaxNewtonFailures = 10;
 constexpr int kStepsBetweenJacobians = 20;
 constexpr double kJacobianCjChange = 0.25;  // refactor when cj moved by more than this fraction
-// The first step after a restart is backward Euler, whose error h^2 q''/2 has one sign at every
-// restart of a periodic circuit and so adds up over the periods: it is held to a hundredth of
-// the tolerance (h^2 |q''| <= 1e-2) instead of IDA's half.
-constexpr double kRestartCurvatureBound = 1e-2;
+// The first step after a restart is sized so that backward Euler's local error h^2 q''/2 would be
+// half the tolerance (IDA's target), the first step's error test being backward Euler's.
+constexpr double kRestartCurvatureBound = 1;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 // Zeno behaviour: this many consecutive event intervals, each shrinking by this ratio or more,
 // are taken as events accumulating toward a finite time.
@@ -94,11 +100,17 @@ struct Integrator::Impl {
   StepOutcome step(double t_stop);
   void set_coefficients();
   void predict();
-  enum class Correction { converged, diverged, outside_domain, singular };
   enum class Newton { modified, modified_fresh, full };
-  Correction correct(double t_new, Newton mode);
+  NewtonOutcome correct(double t_new, Newton mode);
+  NewtonOutcome factor_at_new(double t_new);
+  void newton_correction(const Vector& x_at);
   bool error_test(double& error_k, double& error_k_minus_1, int& order_new);
-  bool trapezoidal_step() const { return options.method == Method::trapezoidal && order == 2; }
+  // The first step after a (re)start is the trapezoidal rule from the re-initialization's q'
+  // (unless the order is held at 1); its error is tested as backward Euler's, the only estimate
+  // one point allows, which bounds the trapezoidal rule's.
+  bool trapezoidal_start() const { return order_used == 0 && options.max_order >= 2; }
+  bool trapezoidal_method_step() const { return options.method == Method::trapezoidal && order == 2; }
+  bool trapezoidal_step() const { return trapezoidal_method_step() || trapezoidal_start(); }
   void complete_step(double error_k, double error_k_minus_1, int order_new);
   void choose_step(double error_estimate, int error_order, double h_max);
   void restore();
@@ -183,6 +195,7 @@ struct Integrator::Impl {
                                     const std::array<double, kHistory>& psi_of, double t_at,
                                     Interpolated what);
   int order = 1, order_used = 0, constant_steps = 0;
+  bool virtual_point_in_history = false;  // the trapezoidal start's (complete_step)
   bool startup_phase = true;
   int steps_since_restart = 0;
   double h = 0, h_used = 0, cj = 0, error_coefficient = 0;
@@ -293,10 +306,12 @@ void Integrator::Impl::set_coefficients() {
   }
   cj = -alpha_s / h;
   error_coefficient = std::max(std::abs(alpha[order] + alpha_s - alpha_0), alpha[order]);
-  if (trapezoidal_step()) {
-    cj = 2 / h;
-    error_coefficient = h * h / (h * h + 2 * psi[1] * psi[2]);
-  }
+  if (trapezoidal_step()) cj = 2 / h;
+  // The predictor misses by (1/12 + prod / (6 h^3)) h^3 q''', prod the product of t + h - t_j
+  // over the points t_j it interpolates: t, t - psi0, t - psi1 (Hermite's after the start: t
+  // twice and t - psi0).
+  if (trapezoidal_method_step())
+    error_coefficient = h * h / (h * h + 2 * (virtual_point_in_history ? psi[0] : psi[2]) * psi[1]);
   for (int i = constant_steps; i <= order; ++i) {
     phi_x[i] *= beta[i];
     phi_q[i] *= beta[i];
@@ -335,78 +350,79 @@ void Integrator::Impl::predict() {
 }
 
 // Newton on  qdot_pred + cj (q(x) - q_pred) + f(t, x) = 0, from x_pred: modified Newton with
-// the matrix reused across steps (IDA's), or refactored at every iterate (mode full).
-Integrator::Impl::Correction Integrator::Impl::correct(double t_new, Newton mode) {
+// the matrix reused across steps (IDA's), or damped Newton refactored at every iterate (mode
+// full).
+NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
   x_new = x_predicted;
-  auto factor_here = [&]() {
-    auto outcome = newton.factor(t_new, x_new, p, cj);
-    if (outcome == NewtonMatrix::Outcome::outside_domain) return Correction::outside_domain;
-    if (outcome == NewtonMatrix::Outcome::singular) return Correction::singular;
-    have_matrix = true;
+  if (mode == Newton::full) {
+    const CorrectorEquation equation{t_new, cj, q_predicted, q_derivative_predicted, x_predicted, p};
+    const NewtonOutcome outcome =
+        solve_damped(newton, statistics, equation, inverse_weight_x, kNewtonTolerance, kMaxFullNewtonIterations, x_new);
+    have_matrix = outcome != NewtonOutcome::singular;
     cj_of_matrix = cj;
     step_of_matrix = statistics.steps;
     convergence_factor = 20;
-    return Correction::converged;
-  };
-  if (mode != Newton::modified) {
-    if (Correction outcome = factor_here(); outcome != Correction::converged) return outcome;
+    if (outcome == NewtonOutcome::converged) q_new = newton.load().q;
+    return outcome;
+  }
+  if (mode == Newton::modified_fresh) {
+    if (NewtonOutcome outcome = factor_at_new(t_new); outcome != NewtonOutcome::converged) return outcome;
   } else if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) {
-    return Correction::outside_domain;
+    return NewtonOutcome::outside_domain;
   }
 
-  const int max_iterations = mode == Newton::full ? kMaxFullNewtonIterations : kMaxNewtonIterations;
   const double toldel = 1e-4 * kNewtonTolerance;
-  double first_norm = 0, previous_norm = 0;
-  auto newton_correction = [&]() {
-    const Load& load = newton.load();
-    residual = q_derivative_predicted + cj * (load.q - q_predicted) + load.f;
-    for (int i : newton.auxiliary_unknowns()) residual[i] = x_new[i] - x_predicted[i];
-    delta = residual;
-    newton.solve(delta);
-    const double cj_ratio = cj / cj_of_matrix;
-    if (cj_ratio != 1.0) delta *= 2.0 / (1.0 + cj_ratio);  // compensates the stale cj
-  };
+  double first_norm = 0;
   for (int m = 0;; ++m) {
     ++statistics.newton_iterations;
-    newton_correction();
+    newton_correction(x_new);
     x_new -= delta;
     // Converged means every unknown within its tolerance, as circuit simulators require: an
     // algebraic current that steers a switch must not hide in an average.
     double norm = weighted_max_norm(delta, inverse_weight_x);
-    if (!std::isfinite(norm)) return Correction::diverged;
+    if (!std::isfinite(norm)) return NewtonOutcome::diverged;
     bool converged = false;
-    if (mode == Newton::full) {
-      // Quadratic convergence: judge by the last two corrections.
-      double rate = m == 0 ? 1.0 : norm / previous_norm;
-      converged = norm <= 1e-4 * toldel || (rate < kMaxConvergenceRate && rate / (1 - rate) * norm <= kNewtonTolerance);
-    } else if (m == 0) {
+    if (m == 0) {
       first_norm = norm;
       converged = norm <= 1e-4 * toldel || convergence_factor * norm <= kNewtonTolerance;
     } else {
       double rate = std::pow(norm / first_norm, 1.0 / m);
-      if (rate > kMaxConvergenceRate) return Correction::diverged;
+      if (rate > kMaxConvergenceRate) return NewtonOutcome::diverged;
       convergence_factor = rate / (1 - rate);
       converged = convergence_factor * norm <= kNewtonTolerance;
     }
-    previous_norm = norm;
-    if (!converged && m + 1 >= max_iterations) return Correction::diverged;
-    if (mode == Newton::full && !converged) {
-      if (Correction outcome = factor_here(); outcome != Correction::converged) return outcome;
-      continue;
-    }
+    if (!converged && m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;
     // q at the new point, which the history needs exactly (charge conservation); the same
     // evaluation checks that a convergence judged from a remembered rate really holds: the next
     // correction must be within the tolerance too (a junction turning off inside the step
     // breaks the linearization an earlier step's rate was measured on).
-    if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return Correction::outside_domain;
+    if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return NewtonOutcome::outside_domain;
     if (!converged) continue;
-    newton_correction();
+    newton_correction(x_new);
     if (weighted_max_norm(delta, inverse_weight_x) <= kNewtonTolerance) break;
     convergence_factor = 20;
-    if (m + 1 >= max_iterations) return Correction::diverged;
+    if (m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;
   }
   q_new = newton.load().q;
-  return Correction::converged;
+  return NewtonOutcome::converged;
+}
+
+NewtonOutcome Integrator::Impl::factor_at_new(double t_new) {
+  auto outcome = newton.factor(t_new, x_new, p, cj);
+  if (outcome == NewtonMatrix::Outcome::outside_domain) return NewtonOutcome::outside_domain;
+  if (outcome == NewtonMatrix::Outcome::singular) return NewtonOutcome::singular;
+  have_matrix = true;
+  cj_of_matrix = cj;
+  step_of_matrix = statistics.steps;
+  convergence_factor = 20;
+  return NewtonOutcome::converged;
+}
+
+// delta = J^-1 r(x_at), r the corrector's residual at the last evaluation (which was at x_at).
+void Integrator::Impl::newton_correction(const Vector& x_at) {
+  corrector_correction(newton, {t, cj, q_predicted, q_derivative_predicted, x_predicted, p}, x_at, residual, delta);
+  const double cj_ratio = cj / cj_of_matrix;
+  if (cj_ratio != 1.0) delta *= 2.0 / (1.0 + cj_ratio);  // compensates the stale cj
 }
 
 // IDA's IDATestError: local error at order k from the q correction, and the estimates at orders
@@ -416,7 +432,7 @@ bool Integrator::Impl::error_test(double& error_k, double& error_k_minus_1, int&
   double norm_k = weighted_norm(correction_q, inverse_weight_q, options.norm);
   order_new = order;
   error_k_minus_1 = 0;
-  if (trapezoidal_step()) {
+  if (trapezoidal_method_step()) {
     error_k = error_coefficient * norm_k;
     return error_k <= 1.0;
   }
@@ -447,6 +463,8 @@ void Integrator::Impl::choose_step(double error_estimate, int error_order, doubl
 // IDA's IDACompleteStep: order and step for the next step, then the divided differences.
 void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int order_new) {
   ++statistics.steps;
+  const bool started = trapezoidal_start();
+  virtual_point_in_history = false;
   const int order_change = order - order_used;
   order_used = order;
   h_used = h;
@@ -454,12 +472,14 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
 
   const double h_max = options.max_step > 0 ? options.max_step : std::numeric_limits<double>::infinity();
   // IDA's start-up: raise the order and double the step until a step fails or the order
-  // drops (the first step's size came from an estimate, so it is kept once). It also ends
-  // where the error estimate forbids doubling even at this order: that step would fail.
+  // drops. It also ends where the error estimate forbids doubling even at this order: that
+  // step would fail.
   if (startup_phase && steps_since_restart > 0 && step_ratio(error_k, order) < 2)
     startup_phase = false;
   if (startup_phase) {
-    if (++steps_since_restart > 1) {
+    // IDA keeps the first step's size once, as it came from an estimate; after the
+    // trapezoidal start the history is of order 2 at once (below).
+    if (++steps_since_restart > 1 || started) {
       order = std::min(order + 1, options.max_order);
       h = std::min(2 * h, h_max);
     }
@@ -494,7 +514,7 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
     choose_step(error_new, order, h_max);
   }
 
-  if (options.method == Method::trapezoidal) q_derivative = q_derivative_predicted + cj * correction_q;
+  if (options.method == Method::trapezoidal || started) q_derivative = q_derivative_predicted + cj * correction_q;
   correction_x = x_new - x_predicted;
   if (order_used < options.max_order) {
     phi_x[order_used + 1] = correction_x;
@@ -505,6 +525,16 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
   for (int j = order_used - 1; j >= 0; --j) {
     phi_x[j] += phi_x[j + 1];
     phi_q[j] += phi_q[j + 1];
+  }
+  if (started) {
+    // The history becomes the quadratic through q0 and q1 with slope q'1 at t1 (Hermite's):
+    // the one through q1, q0 and a virtual point at t0 - h, whose second modified divided
+    // difference is h^2 P'' = 2 (h q'1 - (q1 - q0)). x keeps the line through x0 and x1.
+    psi[1] = 2 * h_used;
+    phi_q[2] = 2 * (h_used * q_derivative - phi_q[1]);
+    phi_x[2].setZero();
+    order_used = 2;
+    virtual_point_in_history = true;
   }
 }
 
@@ -543,27 +573,27 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     const double cj_change_allowed = trapezoidal_step() ? 0.0 : kJacobianCjChange;
     bool fresh = !have_matrix || std::abs(cj / cj_of_matrix - 1) > cj_change_allowed ||
                  statistics.steps >= step_of_matrix + kStepsBetweenJacobians;
-    Correction correction = correct(t_new, fresh ? Newton::modified_fresh : Newton::modified);
-    if (correction == Correction::diverged && !fresh) correction = correct(t_new, Newton::modified_fresh);
-    if (correction == Correction::diverged) correction = correct(t_new, Newton::full);
+    NewtonOutcome correction = correct(t_new, fresh ? Newton::modified_fresh : Newton::modified);
+    if (correction == NewtonOutcome::diverged && !fresh) correction = correct(t_new, Newton::modified_fresh);
+    if (correction == NewtonOutcome::diverged) correction = correct(t_new, Newton::full);
 
-    if (correction != Correction::converged) {
+    if (correction != NewtonOutcome::converged) {
       restore();
-      if (correction == Correction::outside_domain) ++statistics.rejected_domain;
+      if (correction == NewtonOutcome::outside_domain) ++statistics.rejected_domain;
       else ++statistics.rejected_newton;
       if (++newton_failures >= kMaxNewtonFailures || h <= minimum_step()) {
         int worst = -1;
         weighted_max_norm(delta, inverse_weight_x, &worst);
-        std::string why = correction == Correction::singular
+        std::string why = correction == NewtonOutcome::singular
                               ? "the Newton matrix is singular (column " + std::to_string(newton.singular_column()) + ")"
-                          : correction == Correction::outside_domain
+                          : correction == NewtonOutcome::outside_domain
                               ? "the model cannot be evaluated (outside its domain) however small the step"
                               : "Newton's method does not converge however small the step";
-        if (correction == Correction::singular) worst = newton.singular_column();
+        if (correction == NewtonOutcome::singular) worst = newton.singular_column();
         return fail(t, why + " at t = " + format_time(t), worst);
       }
       h *= 0.25;
-      have_matrix = have_matrix && correction != Correction::singular;
+      have_matrix = have_matrix && correction != NewtonOutcome::singular;
       continue;
     }
 
@@ -901,6 +931,7 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   q_derivative = consistent.q_derivative;
   order = 1;
   order_used = 0;
+  virtual_point_in_history = false;
   h_used = 0;
   have_matrix = false;  // re-initialization factored its own matrices
   psi[0] = h;

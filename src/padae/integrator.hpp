@@ -35,8 +35,8 @@ enum class ErrorNorm { rms, max };
 //   trapezoidal:  order 2, A-stable and without damping: an undamped oscillation keeps its
 //                 amplitude for any step (phase error only). A stiff mode is not damped either
 //                 (it alternates in sign), so this is for oscillators, not for stiff circuits.
-//                 Each (re)start takes backward-Euler steps first, as the error estimate needs
-//                 three points.
+//                 Each (re)start begins, as bdf's does, with a step of this rule from the
+//                 re-initialization's derivative.
 enum class Method { bdf, trapezoidal };
 
 struct Options {

@@ -39,6 +39,7 @@ class NewtonMatrix {
   // Zeroes the entries of v on algebraic rows (no dq/dx in the last factorization).
   void keep_dynamic_rows(Vector& v) const;
   int singular_column() const { return lu_.singular_column(); }
+  int determinant_sign() const { return lu_.determinant_sign(); }
   bool is_auxiliary(int unknown) const { return auxiliary_[unknown]; }
   const std::vector<int>& auxiliary_unknowns() const { return auxiliary_list_; }
 

@@ -264,6 +264,59 @@ TEST(Integrator, DenseOutputSolvesWhereNewtonFromThePolynomialFails) {
   EXPECT_LT(worst, 1e-6);
 }
 
+// The first step from a consistent state is the trapezoidal rule (local error h^3 x''' / 12), not
+// backward Euler (h^2 x'' / 2): on x' = -x a first step of 1e-3 leaves 8e-11, where backward
+// Euler would leave 5e-7.
+TEST(Integrator, FirstStepIsOfSecondOrder) {
+  Decay decay(1.0);
+  Options options;
+  options.rtol = 1e-6;
+  options.atol = 1e-9;
+  options.initial_step = 1e-3;
+  Integrator integrator(decay, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+  ASSERT_EQ(integrator.step(10.0).kind, StepKind::accepted);
+  const double h = integrator.step_size();
+  ASSERT_EQ(h, 1e-3);
+  EXPECT_LT(std::abs(integrator.state()[0] - std::exp(-h)), h * h * h / 6);
+}
+
+// 0 = y^3 - 3 y + 1e-9 y - 3000 t: a branch of solutions from y(0) = 0 that ends at the fold
+// y = -1, t = 2/3 ms; past it the only solution is on another branch (y > 2). No charge is
+// error-tested, so only max_step sets the steps: whichever they are, the run must stop at the
+// fold (its last points within the tolerance of it), not go on along the other branch.
+class Fold : public SemiExplicitSystem {
+ public:
+  Fold() : SemiExplicitSystem({A}) {}
+  EvalStatus equations(double t, const Vector& z, const Predicates&, Vector& out) override {
+    const double y = z[0];
+    out[0] = y * y * y - 3 * y + 1e-9 * y - 3000 * t;
+    return EvalStatus::ok;
+  }
+  bool has_equation_jacobian() const override { return true; }
+  bool equation_jacobian(double, const Vector& z, const Predicates&, std::vector<double>& values) override {
+    values[0] = 3 * z[0] * z[0] - 3 + 1e-9;
+    return true;
+  }
+};
+
+TEST(Integrator, StopsWhereAnAlgebraicBranchEndsWhereverTheStepsFall) {
+  const double fold = (2 + 1e-9) / 3000;  // y = -1
+  for (int k = 0; k < 40; ++k) {
+    Fold model;
+    Options options;
+    options.rtol = 1e-3;
+    options.atol = 1e-6;
+    options.time_scale = 1e-3;
+    options.max_step = 2e-6 * (1 + k * 0.37);
+    Integrator integrator(model, options);
+    ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
+    EXPECT_FALSE(run_until(integrator, 1e-3)) << "max_step " << options.max_step << ": went on to y = " << integrator.state()[0];
+    EXPECT_NEAR(integrator.time(), fold, 1e-3 * fold) << "max_step " << options.max_step;
+    EXPECT_NEAR(integrator.state()[0], -1.0, 1e-2) << "max_step " << options.max_step;
+  }
+}
+
 // An index-1 DAE: x' = -y, 0 = y - x^2 (x = 1 / (1 + t)); the algebraic y is not error-tested.
 class IndexOne : public SemiExplicitSystem {
  public:

@@ -13,7 +13,7 @@ namespace {
 
 constexpr int kMaxIterations = 100;      // junctions far from their solution need many
 constexpr double kConvergedNorm = 1e-2;  // Newton correction, in tolerance units
-constexpr double kRefactorRate = 0.1;    // damped Newton when modified Newton contracts slower
+constexpr double kFastContraction = 0.1;  // modified Newton goes on while it contracts this fast
 // The factorization held serves the next row while every entry of the matrix at Newton's start
 // is within this fraction of it: modified Newton then contracts about as fast as on a fresh
 // matrix, so a small first correction is as telling. A matrix from another operating point
@@ -50,7 +50,7 @@ std::optional<Vector> DenseOutput::solve(double t, const Vector& x_guess, const 
     corrector_correction(newton_, equation, x, residual_, delta_);
     x -= delta_;
     const double norm = weighted_max_norm(delta_, inverse_weight_);
-    if (!std::isfinite(norm) || norm > kRefactorRate * previous_norm) break;
+    if (!std::isfinite(norm) || norm > kFastContraction * previous_norm) break;
     if (norm <= kConvergedNorm) return x;
     if (newton_.evaluate(t, x, p) != EvalStatus::ok) break;
     previous_norm = norm;

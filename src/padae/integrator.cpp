@@ -102,8 +102,8 @@ struct Integrator::Impl {
   void predict();
   enum class Newton { modified, modified_fresh, full };
   NewtonOutcome correct(double t_new, Newton mode);
-  NewtonOutcome factor_at_new(double t_new);
-  void newton_correction(const Vector& x_at);
+  void hold_matrix();
+  void newton_correction(const CorrectorEquation& equation);
   bool error_test(double& error_k, double& error_k_minus_1, int& order_new);
   // The first step after a (re)start is the trapezoidal rule from the re-initialization's q'
   // (unless the order is held at 1); its error is tested as backward Euler's, the only estimate
@@ -354,19 +354,20 @@ void Integrator::Impl::predict() {
 // full).
 NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
   x_new = x_predicted;
+  const CorrectorEquation equation{t_new, cj, q_predicted, q_derivative_predicted, x_predicted, p};
   if (mode == Newton::full) {
-    const CorrectorEquation equation{t_new, cj, q_predicted, q_derivative_predicted, x_predicted, p};
     const NewtonOutcome outcome =
         solve_damped(newton, statistics, equation, inverse_weight_x, kNewtonTolerance, kMaxFullNewtonIterations, x_new);
+    hold_matrix();
     have_matrix = outcome != NewtonOutcome::singular;
-    cj_of_matrix = cj;
-    step_of_matrix = statistics.steps;
-    convergence_factor = 20;
     if (outcome == NewtonOutcome::converged) q_new = newton.load().q;
     return outcome;
   }
   if (mode == Newton::modified_fresh) {
-    if (NewtonOutcome outcome = factor_at_new(t_new); outcome != NewtonOutcome::converged) return outcome;
+    const auto factored = newton.factor(t_new, x_new, p, cj);
+    if (factored == NewtonMatrix::Outcome::outside_domain) return NewtonOutcome::outside_domain;
+    if (factored == NewtonMatrix::Outcome::singular) return NewtonOutcome::singular;
+    hold_matrix();
   } else if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) {
     return NewtonOutcome::outside_domain;
   }
@@ -375,7 +376,7 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
   double first_norm = 0;
   for (int m = 0;; ++m) {
     ++statistics.newton_iterations;
-    newton_correction(x_new);
+    newton_correction(equation);
     x_new -= delta;
     // Converged means every unknown within its tolerance, as circuit simulators require: an
     // algebraic current that steers a switch must not hide in an average.
@@ -398,7 +399,7 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
     // breaks the linearization an earlier step's rate was measured on).
     if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return NewtonOutcome::outside_domain;
     if (!converged) continue;
-    newton_correction(x_new);
+    newton_correction(equation);
     if (weighted_max_norm(delta, inverse_weight_x) <= kNewtonTolerance) break;
     convergence_factor = 20;
     if (m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;
@@ -407,20 +408,17 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
   return NewtonOutcome::converged;
 }
 
-NewtonOutcome Integrator::Impl::factor_at_new(double t_new) {
-  auto outcome = newton.factor(t_new, x_new, p, cj);
-  if (outcome == NewtonMatrix::Outcome::outside_domain) return NewtonOutcome::outside_domain;
-  if (outcome == NewtonMatrix::Outcome::singular) return NewtonOutcome::singular;
+// The matrix just factored (at this step's cj) is the one modified Newton goes on with.
+void Integrator::Impl::hold_matrix() {
   have_matrix = true;
   cj_of_matrix = cj;
   step_of_matrix = statistics.steps;
   convergence_factor = 20;
-  return NewtonOutcome::converged;
 }
 
-// delta = J^-1 r(x_at), r the corrector's residual at the last evaluation (which was at x_at).
-void Integrator::Impl::newton_correction(const Vector& x_at) {
-  corrector_correction(newton, {t, cj, q_predicted, q_derivative_predicted, x_predicted, p}, x_at, residual, delta);
+// delta = J^-1 r(x_new), r the corrector's residual at the last evaluation (which was at x_new).
+void Integrator::Impl::newton_correction(const CorrectorEquation& equation) {
+  corrector_correction(newton, equation, x_new, residual, delta);
   const double cj_ratio = cj / cj_of_matrix;
   if (cj_ratio != 1.0) delta *= 2.0 / (1.0 + cj_ratio);  // compensates the stale cj
 }

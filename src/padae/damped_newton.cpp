@@ -24,14 +24,14 @@ void corrector_correction(const NewtonMatrix& newton, const CorrectorEquation& e
 }
 
 NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const CorrectorEquation& equation,
-                           const Vector& inverse_weight, double tolerance, int max_iterations, Vector& x) {
+                           const Vector& inverse_weight, double tolerance, int max_iterations, Vector& x,
+                           int branch_sign) {
   Vector residual, step, trial, simplified;
-  int start_sign = 0;
   // The last correction taken; q and f are left evaluated at the solution. A solution where the
-  // matrix's determinant has another sign than at the start is across a fold from it, on
+  // matrix's determinant has another sign than on the branch is across a fold from it, on
   // another branch: refused.
   auto converge = [&](const Vector& correction) {
-    if (newton.determinant_sign() != start_sign) return NewtonOutcome::diverged;
+    if (newton.determinant_sign() != branch_sign) return NewtonOutcome::diverged;
     x -= correction;
     return newton.evaluate(equation.t, x, equation.p) == EvalStatus::ok ? NewtonOutcome::converged
                                                                         : NewtonOutcome::outside_domain;
@@ -40,7 +40,7 @@ NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const C
     const auto factored = newton.factor(equation.t, x, equation.p, equation.c);
     if (factored == NewtonMatrix::Outcome::outside_domain) return NewtonOutcome::outside_domain;
     if (factored == NewtonMatrix::Outcome::singular) return NewtonOutcome::singular;
-    if (iteration == 0) start_sign = newton.determinant_sign();
+    if (branch_sign == 0) branch_sign = newton.determinant_sign();
     ++statistics.newton_iterations;
     corrector_correction(newton, equation, x, residual, step);
     const double norm = weighted_max_norm(step, inverse_weight);
@@ -58,9 +58,10 @@ NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const C
       // tolerance, not a failure.
       if (damping == 1 && norm <= 1) return converge(step);
     }
+    // The simplified correction is on the matrix at the last iterate, which can be far stiffer
+    // than the one at the trial (a junction that has since turned off): however small, it does
+    // not prove convergence, the next fresh correction does.
     x = trial;
-    // Near the solution the simplified correction is the remaining error: taken, it converges.
-    if (damping == 1 && simplified_norm <= tolerance) return converge(simplified);
   }
   return NewtonOutcome::diverged;
 }

@@ -32,9 +32,12 @@ enum class NewtonOutcome { converged, diverged, outside_domain, singular };
 
 // Solves from x (overwritten by the solution, or by the last iterate on failure). Converged: a
 // full correction within `tolerance` in the max norm weighted by inverse_weight (also when the
-// corrections stall within one tolerance unit: the round-off floor). Each iteration counts in
+// corrections stall within one tolerance unit: the round-off floor). branch_sign: the sign of
+// det J on the branch sought (a step's corrector knows it from the step's start, which a
+// predictor can overshoot past a fold); 0 takes the start's. Each iteration counts in
 // statistics.newton_iterations.
 NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const CorrectorEquation& equation,
-                           const Vector& inverse_weight, double tolerance, int max_iterations, Vector& x);
+                           const Vector& inverse_weight, double tolerance, int max_iterations, Vector& x,
+                           int branch_sign = 0);
 
 }  // namespace padae

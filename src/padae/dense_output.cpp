@@ -14,11 +14,11 @@ namespace {
 constexpr int kMaxIterations = 100;      // junctions far from their solution need many
 constexpr double kConvergedNorm = 1e-2;  // Newton correction, in tolerance units
 constexpr double kFastContraction = 0.1;  // modified Newton goes on while it contracts this fast
-// The factorization held serves the next row while every entry of the matrix at Newton's start
-// is within this fraction of it: modified Newton then contracts about as fast as on a fresh
-// matrix, so a small first correction is as telling. A matrix from another operating point
-// can be far stiffer (a diode that has since turned off): a small correction on it proves
-// nothing.
+// The factorization held serves the next row while its drift from the matrix at Newton's
+// start (NewtonMatrix::drift) is within this: modified Newton then contracts about as fast as
+// on a fresh matrix, so a small first correction is as telling. A matrix from another
+// operating point can be far stiffer (a diode that has since turned off): a small correction
+// on it proves nothing.
 constexpr double kKeptMatrixDrift = 0.1;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
@@ -43,7 +43,8 @@ std::optional<Vector> DenseOutput::solve(double t, const Vector& x_guess, const 
   // A row next to the last: modified Newton, on the factorization held if it is close, while
   // it contracts fast.
   Vector x = x_guess;
-  if (newton_.factor(t, x, p, c, kKeptMatrixDrift) != NewtonMatrix::Outcome::ok) return std::nullopt;
+  const auto factored = newton_.factor(t, x, p, c, kKeptMatrixDrift);
+  if (factored != NewtonMatrix::Outcome::ok && factored != NewtonMatrix::Outcome::kept) return std::nullopt;
   double previous_norm = std::numeric_limits<double>::infinity();
   for (int iteration = 0; iteration < kMaxIterations; ++iteration) {
     ++statistics_.newton_iterations;

@@ -51,6 +51,11 @@ constexpr int kMaxErrorTestFailures = 10;
 constexpr int kMaxNewtonFailures = 10;
 constexpr int kStepsBetweenJacobians = 20;
 constexpr double kJacobianCjChange = 0.25;  // refactor when cj moved by more than this fraction
+// Convergence on a held matrix is confirmed on it only while it is nowhere twice as stiff as the
+// matrix at the solution (NewtonMatrix::drift): on a stiffer matrix a large residual gives a
+// small correction (a junction the matrix was factored at in hard conduction, and now nearly
+// off, hides amps of residual). Past that, the matrix is refactored at the solution.
+constexpr double kConfirmingDrift = 1;
 // The first step after a restart is sized so that backward Euler's local error h^2 q''/2 would be
 // half the tolerance (IDA's target), the first step's error test being backward Euler's.
 constexpr double kRestartCurvatureBound = 1;
@@ -103,6 +108,7 @@ struct Integrator::Impl {
   enum class Newton { modified, modified_fresh, full };
   NewtonOutcome correct(double t_new, Newton mode);
   void hold_matrix();
+  int sign_on_branch(double t_new);
   void newton_correction(const CorrectorEquation& equation);
   bool error_test(double& error_k, double& error_k_minus_1, int& order_new);
   // The first step after a (re)start is the trapezoidal rule from the re-initialization's q'
@@ -356,8 +362,8 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
   x_new = x_predicted;
   const CorrectorEquation equation{t_new, cj, q_predicted, q_derivative_predicted, x_predicted, p};
   if (mode == Newton::full) {
-    const NewtonOutcome outcome =
-        solve_damped(newton, statistics, equation, inverse_weight_x, kNewtonTolerance, kMaxFullNewtonIterations, x_new);
+    const NewtonOutcome outcome = solve_damped(newton, statistics, equation, inverse_weight_x, kNewtonTolerance,
+                                               kMaxFullNewtonIterations, x_new, sign_on_branch(t_new));
     hold_matrix();
     have_matrix = outcome != NewtonOutcome::singular;
     if (outcome == NewtonOutcome::converged) q_new = newton.load().q;
@@ -374,7 +380,7 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
 
   const double toldel = 1e-4 * kNewtonTolerance;
   double first_norm = 0;
-  for (int m = 0;; ++m) {
+  for (int m = 0, m_first = 0;; ++m) {
     ++statistics.newton_iterations;
     newton_correction(equation);
     x_new -= delta;
@@ -383,29 +389,55 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
     double norm = weighted_max_norm(delta, inverse_weight_x);
     if (!std::isfinite(norm)) return NewtonOutcome::diverged;
     bool converged = false;
-    if (m == 0) {
+    if (m == m_first) {
       first_norm = norm;
       converged = norm <= 1e-4 * toldel || convergence_factor * norm <= kNewtonTolerance;
     } else {
-      double rate = std::pow(norm / first_norm, 1.0 / m);
+      double rate = std::pow(norm / first_norm, 1.0 / (m - m_first));
       if (rate > kMaxConvergenceRate) return NewtonOutcome::diverged;
       convergence_factor = rate / (1 - rate);
       converged = convergence_factor * norm <= kNewtonTolerance;
     }
     if (!converged && m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;
-    // q at the new point, which the history needs exactly (charge conservation); the same
-    // evaluation checks that a convergence judged from a remembered rate really holds: the next
-    // correction must be within the tolerance too (a junction turning off inside the step
-    // breaks the linearization an earlier step's rate was measured on).
-    if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return NewtonOutcome::outside_domain;
-    if (!converged) continue;
+    // q at the new point, which the history needs exactly (charge conservation).
+    if (!converged) {
+      if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return NewtonOutcome::outside_domain;
+      continue;
+    }
+    // A convergence judged from a remembered rate must really hold: the next correction, on a
+    // matrix that can judge it, must be within the tolerance too (a junction turning off inside
+    // the step breaks the linearization an earlier step's rate was measured on). A matrix that
+    // far from the one held may be across a fold from the step's start (damped_newton.hpp):
+    // such a solution is refused.
+    const auto confirming = newton.factor(t_new, x_new, p, cj, kConfirmingDrift);
+    if (confirming == NewtonMatrix::Outcome::outside_domain) return NewtonOutcome::outside_domain;
+    if (confirming == NewtonMatrix::Outcome::singular) return NewtonOutcome::singular;
+    if (confirming == NewtonMatrix::Outcome::ok) {
+      const int sign = newton.determinant_sign();
+      if (sign != sign_on_branch(t_new)) return NewtonOutcome::diverged;
+      if (newton.factor(t_new, x_new, p, cj) != NewtonMatrix::Outcome::ok) return NewtonOutcome::singular;
+      hold_matrix();
+    }
     newton_correction(equation);
     if (weighted_max_norm(delta, inverse_weight_x) <= kNewtonTolerance) break;
     convergence_factor = 20;
     if (m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;
+    // The rate is measured afresh from the next correction on: it may be on another matrix.
+    m_first = m + 1;
   }
   q_new = newton.load().q;
   return NewtonOutcome::converged;
+}
+
+// The sign of det J at the step's start (x, on the branch the step follows) with this step's cj;
+// 0 when J is singular there. The matrix factored there becomes the one held.
+int Integrator::Impl::sign_on_branch(double t_new) {
+  if (newton.factor(t_new, x, p, cj) != NewtonMatrix::Outcome::ok) {
+    have_matrix = false;
+    return 0;
+  }
+  hold_matrix();
+  return newton.determinant_sign();
 }
 
 // The matrix just factored (at this step's cj) is the one modified Newton goes on with.

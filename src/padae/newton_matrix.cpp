@@ -125,7 +125,7 @@ EvalStatus NewtonMatrix::finite_difference_derivatives(double t, const Vector& x
 NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Predicates& p,
                                            double cj, double keep_within) {
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
-  if (keep_within > 0 && holds_factorization_near(p, cj, keep_within)) return Outcome::ok;
+  if (keep_within > 0 && drift(p, cj) <= keep_within) return Outcome::kept;
   for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
   const Outcome outcome = factor_loaded();
   if (outcome == Outcome::ok) {
@@ -135,21 +135,27 @@ NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Pred
   return outcome;
 }
 
-// The factorization held is of factor()'s form and mode p, and within keep_within of
-// df/dx + cj dq/dx as loaded now, entry by entry (auxiliary rows are identity rows in both):
-// another cj is as good as another operating point while the entries stay that close.
-bool NewtonMatrix::holds_factorization_near(const Predicates& p, double cj,
-                                            double keep_within) const {
-  if (factored_cj_ == 0 || factored_mode_ != p) return false;
+double NewtonMatrix::drift(const Predicates& p, double cj) const {
+  if (factored_cj_ == 0 || factored_mode_ != p) return std::numeric_limits<double>::infinity();
   const auto& starts = pattern_.column_starts();
   const auto& rows = pattern_.row_indices();
-  for (int column = 0; column < pattern_.size(); ++column)
+  const int n = pattern_.size();
+  // row_scale_: the largest |now| of each row, then the largest |factored - now|.
+  row_scale_.setZero(2 * n);
+  for (int column = 0; column < n; ++column)
     for (int k = starts[column]; k < starts[column + 1]; ++k) {
-      if (auxiliary_[rows[k]]) continue;
       const double now = load_.df_dx[k] + cj * load_.dq_dx[k];
-      if (!(std::abs(now - matrix_[k]) <= keep_within * std::abs(matrix_[k]))) return false;
+      double& largest = row_scale_[rows[k]];
+      largest = std::max(largest, std::abs(now));
+      double& difference = row_scale_[n + rows[k]];
+      difference = std::max(difference, std::abs(matrix_[k] - now));
     }
-  return true;
+  double largest_drift = 0;
+  for (int row = 0; row < n; ++row) {
+    if (auxiliary_[row] || row_scale_[n + row] == 0) continue;
+    largest_drift = std::max(largest_drift, row_scale_[n + row] / row_scale_[row]);
+  }
+  return largest_drift;
 }
 
 NewtonMatrix::Outcome NewtonMatrix::factor_shifted(double t, const Vector& x, const Predicates& p,

@@ -21,9 +21,9 @@ class NewtonMatrix {
   // f, q and their derivatives at (t, x, p); then factors df/dx + cj dq/dx (rows of auxiliary
   // unknowns replaced by identity rows). False with a reason when the model fails or the matrix
   // is singular.
-  enum class Outcome { ok, outside_domain, singular };
-  // keep_within > 0: keeps the factorization it holds when that is of mode p and no entry of
-  // the new matrix (cj included) differs from the factored one by more than keep_within of it.
+  enum class Outcome { ok, kept, outside_domain, singular };
+  // keep_within > 0: keeps the factorization it holds (Outcome::kept) while its drift from the
+  // matrix loaded now is at most keep_within (see drift()).
   Outcome factor(double t, const Vector& x, const Predicates& p, double cj, double keep_within = 0);
   // df/dx + shift I: pseudo-transient continuation toward a steady state.
   Outcome factor_shifted(double t, const Vector& x, const Predicates& p, double shift);
@@ -48,7 +48,13 @@ class NewtonMatrix {
   EvalStatus finite_difference_derivatives(double t, const Vector& x, const Predicates& p,
                                            Load& out);
   Outcome factor_loaded();
-  bool holds_factorization_near(const Predicates& p, double cj, double keep_within) const;
+  // The factorization's drift from df/dx + cj dq/dx as loaded now: the largest, over the rows,
+  // of the row's largest |factored - now| over its largest |now|; infinite when the
+  // factorization is of another mode or not of factor()'s form. Row by row because what moves
+  // Newton is an entry's weight in its equation: a reverse-biased junction's conductance may
+  // change a hundredfold beside a resistor's and matter nowhere. Below 1 in every row the
+  // factorization is nowhere twice as stiff as the matrix now.
+  double drift(const Predicates& p, double cj) const;
 
   System& system_;
   Statistics& statistics_;
@@ -59,6 +65,7 @@ class NewtonMatrix {
   Load perturbed_;        // scratch for finite differences
   std::vector<double> matrix_;
   std::vector<double> abs_dq_dx_;  // |dq/dx| of the last factorization
+  mutable Vector row_scale_;       // scratch of drift()
   std::vector<char> auxiliary_;
   std::vector<int> auxiliary_list_;
   std::vector<int> diagonal_;      // value index of (i, i)

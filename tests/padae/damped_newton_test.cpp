@@ -36,7 +36,8 @@ struct Solve {
   double y;
 };
 
-Solve solve(Function g, Function g_derivative, double y_start) {
+// tolerance: of the correction, in volts.
+Solve solve(Function g, Function g_derivative, double y_start, double tolerance = 1e-9) {
   Scalar system(g, g_derivative);
   Statistics statistics;
   NewtonMatrix newton(system, statistics, Vector::Constant(1, 1e-9));
@@ -44,7 +45,7 @@ Solve solve(Function g, Function g_derivative, double y_start) {
   const Predicates p;
   const CorrectorEquation equation{0.0, 1.0, zero, zero, held, p};
   Vector y = held;
-  const Vector inverse_weight = Vector::Constant(1, 1e9);  // tolerance 1e-9 V
+  const Vector inverse_weight = Vector::Constant(1, 1 / tolerance);
   const NewtonOutcome outcome = solve_damped(newton, statistics, equation, inverse_weight, 0.33, 30, y);
   return {outcome, y[0]};
 }
@@ -58,6 +59,19 @@ TEST(DampedNewton, ReachesAJunctionFromFarBelowItsSolution) {
                              [](double y) { return std::exp(y / kThermal) / kThermal; }, -0.5);
   ASSERT_EQ(result.outcome, NewtonOutcome::converged) << result.y;
   EXPECT_NEAR(result.y, kThermal * std::log(1e6), 1e-9);
+}
+
+// A junction behind a 20 mOhm resistor from -1 V: 0 = (y + 1) / 0.02 + 1e-12 (exp(y / VT) - 1),
+// solved from y = 1 V, where the junction conducts hard; the solution is y = -1 V within 1e-13.
+// Each full Newton step from there lowers y by about VT, and the residual after it, on the matrix
+// of the step's start, gives a correction of VT / e: at a loose tolerance of 40 mV that looks
+// converged at 1 V. Only a correction on the matrix at the iterate itself can tell.
+TEST(DampedNewton, TakesNoCorrectionOnAStaleMatrixForConvergence) {
+  const Solve result = solve([](double y) { return (y + 1) / 0.02 + 1e-12 * std::expm1(y / kThermal); },
+                             [](double y) { return 1 / 0.02 + 1e-12 * std::exp(y / kThermal) / kThermal; }, 1.0,
+                             0.04);
+  ASSERT_EQ(result.outcome, NewtonOutcome::converged) << result.y;
+  EXPECT_NEAR(result.y, -1.0, 0.04);
 }
 
 // 0 = y^3 - 3 y - I on the middle branch (-1 < y < 1), whose end is the fold y = -1, I = 2.

@@ -302,18 +302,55 @@ class Fold : public SemiExplicitSystem {
 
 TEST(Integrator, StopsWhereAnAlgebraicBranchEndsWhereverTheStepsFall) {
   const double fold = (2 + 1e-9) / 3000;  // y = -1
-  for (int k = 0; k < 40; ++k) {
+  for (int k = 0; k < 400; ++k) {
     Fold model;
     Options options;
     options.rtol = 1e-3;
     options.atol = 1e-6;
     options.time_scale = 1e-3;
-    options.max_step = 2e-6 * (1 + k * 0.37);
+    options.max_step = 2e-6 * (1 + k * 0.037);
     Integrator integrator(model, options);
     ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
     EXPECT_FALSE(run_until(integrator, 1e-3)) << "max_step " << options.max_step << ": went on to y = " << integrator.state()[0];
     EXPECT_NEAR(integrator.time(), fold, 1e-3 * fold) << "max_step " << options.max_step;
     EXPECT_NEAR(integrator.state()[0], -1.0, 1e-2) << "max_step " << options.max_step;
+  }
+}
+
+// A track-and-hold: x' = g(t) (t - x), the conductance g = G / (1 + e^((t - 1) / TAU)) falling
+// from G = 1e6 to nothing within a few TAU = 1e-5 of t = 1, inside one step. Before, x tracks
+// t within 2 / G (where g >= G / 2, e' = 1 - g e with e = t - x keeps e <= 2 / G); after, x
+// moves by at most the integral of g e, below G (e(1) TAU + TAU^2) = 1.2e-4: it holds
+// 1 - 2e-6 <= x <= 1 + 1.2e-4 from then on. Modified Newton on a matrix factored while tracking
+// (G times stiffer than the one in the hold) finds any residual small: such a matrix must not
+// confirm the step's convergence, or x goes on tracking t until the matrix is refreshed.
+class TrackAndHold : public SemiExplicitSystem {
+ public:
+  TrackAndHold() : SemiExplicitSystem({D}) {}
+  static constexpr double kG = 1e6, kTau = 1e-5;
+  static double conductance(double t) { return kG / (1 + std::exp((t - 1) / kTau)); }
+  EvalStatus equations(double t, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = conductance(t) * (t - z[0]);
+    return EvalStatus::ok;
+  }
+  bool has_equation_jacobian() const override { return true; }
+  bool equation_jacobian(double t, const Vector&, const Predicates&, std::vector<double>& values) override {
+    values[0] = -conductance(t);
+    return true;
+  }
+};
+
+TEST(Integrator, HoldsWhereTheMatrixHeldWasFactoredWhileTracking) {
+  for (int k = 0; k < 40; ++k) {
+    TrackAndHold model;
+    Options options;
+    options.rtol = 1e-4;
+    options.atol = 1e-6;
+    options.max_step = 1e-2 * (1 + k * 0.13);
+    Integrator integrator(model, options);
+    ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
+    ASSERT_TRUE(run_until(integrator, 3.0)) << integrator.failure().reason;
+    EXPECT_NEAR(integrator.state()[0], 1.0, 1e-3) << "max_step " << options.max_step;
   }
 }
 

@@ -43,6 +43,7 @@ Crossing locate_first_crossing(const std::function<bool(double, Vector&)>& guard
   int steer = steering_guard(high);
   double weight = 1;  // Illinois: the retained end's value is down-weighted when it repeats
   int side = 0, previous_side = 0;
+  bool nudged = false;  // the last trial point was moved inward from an end
   while (result.t_right - result.t_left > tolerance && steer >= 0) {
     if (previous_side != 0 && side == previous_side)
       weight = side == 2 ? weight * 2 : weight * 0.5;
@@ -52,10 +53,16 @@ Crossing locate_first_crossing(const std::function<bool(double, Vector&)>& guard
     double denominator = high[steer] - weight * low[steer];
     double t = denominator != 0 ? result.t_right - width * high[steer] / denominator
                                 : result.t_left + 0.5 * width;
-    // Keep the trial point inside, so the bracket always shrinks.
-    double margin = width > 10 * tolerance ? 0.1 * width : 0.5 * width;
-    if (!(t - result.t_left >= 0.5 * tolerance)) t = result.t_left + std::min(margin, width);
-    if (!(result.t_right - t >= 0.5 * tolerance)) t = result.t_right - std::min(margin, width);
+    // A trial point within half the tolerance of an end moves inward, so the bracket always
+    // shrinks: by a tenth of the tolerance when the last one did not (the root is most likely
+    // right there, found from the other side: this trial then brackets it well within the
+    // tolerance), else by a tenth of the width (that guess was wrong: shrink the bracket).
+    const double margin = !nudged                  ? std::min(0.1 * tolerance, 0.5 * width)
+                          : width > 10 * tolerance ? 0.1 * width
+                                                   : 0.5 * width;
+    nudged = false;
+    if (!(t - result.t_left >= 0.5 * tolerance)) t = result.t_left + margin, nudged = true;
+    if (!(result.t_right - t >= 0.5 * tolerance)) t = result.t_right - margin, nudged = true;
     if (!(t > result.t_left && t < result.t_right)) t = result.t_left + 0.5 * width;
     if (!(t > result.t_left && t < result.t_right)) break;  // the interval is down to one ulp
 

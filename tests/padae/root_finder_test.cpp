@@ -62,6 +62,27 @@ TEST(RootFinder, ACrossingRightAtTheLeftEndIsFound) {
   EXPECT_NEAR(crossing.t_right, 1.0, 1e-12);
 }
 
+TEST(RootFinder, ALinearGuardIsBracketedInThreeEvaluations) {
+  // A gate drive's ramp between the samples at its corners: regula falsi's first trial is the
+  // root to round-off, and a trial a tenth of the tolerance beside it closes the bracket (a
+  // third where round-off put the first on the wrong side). The bracket used to shrink by a
+  // tenth of its width per trial from there: 12 evaluations.
+  auto guards = [](double t, Vector& out) {
+    out.resize(1);
+    out[0] = 2.5 - 5e8 * t;
+    return true;
+  };
+  Vector left(1), right(1);
+  guards(4.5e-9, left);
+  guards(1.45e-8, right);
+  const double tolerance = 100 * 2.2e-16 * 1e-5;
+  Crossing crossing = locate_first_crossing(guards, Predicates{1}, 4.5e-9, left, 1.45e-8, right, tolerance);
+  EXPECT_LE(crossing.t_right - crossing.t_left, tolerance);
+  EXPECT_LE(crossing.t_left, 5e-9);
+  EXPECT_GE(crossing.t_right, 5e-9);
+  EXPECT_LE(crossing.evaluations, 3);
+}
+
 TEST(RootFinder, SteepGuardNeedsFewEvaluations) {
   // A guard with a huge dynamic range (exp) defeats plain regula falsi; Illinois does not stall.
   auto guards = [](double t, Vector& out) {

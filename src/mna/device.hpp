@@ -161,6 +161,9 @@ class Device {
   // by the initial conditions.
   virtual void initial_auxiliaries(Vector& x0) const { (void)x0; }
 
+  // Whether the device depends on time (an independent source): only such devices are asked
+  // for time events, forcing rows and resolution steps.
+  virtual bool time_dependent() const { return false; }
   virtual double next_time_event(double t) const { (void)t; return infinity; }
   // The rows the device's time dependence enters (appended): where its corners act. A device
   // with time events that lists none has its corners end the step (the safe side).

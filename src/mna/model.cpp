@@ -139,6 +139,10 @@ Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
       kinds_[i] = charged[i] ? padae::UnknownKind::differential : padae::UnknownKind::algebraic;
   }
 
+  for (const auto& d : devices_) {
+    if (d->predicate_count() > 0) predicate_devices_.push_back(d.get());
+    if (d->time_dependent()) time_dependent_devices_.push_back(d.get());
+  }
   for (std::size_t d = 0; d < devices_.size(); ++d) {
     devices_[d]->set_first_predicate(predicate_count_);
     predicate_count_ += devices_[d]->predicate_count();
@@ -162,11 +166,11 @@ padae::EvalStatus Model::load(double t, const Vector& x, const padae::Predicates
   if (holding_) hold_rows(x, out);
   // Outside a device's domain (sqrt of a negative voltage, an overflowing exponential): say so,
   // and padae cuts the step instead of factoring garbage.
-  for (int i = 0; i < size(); ++i)
-    if (!std::isfinite(out.f[i]) || !std::isfinite(out.q[i])) return padae::EvalStatus::outside_domain;
-  if (out.jacobian_requested)
-    for (std::size_t k = 0; k < out.df_dx.size(); ++k)
-      if (!std::isfinite(out.df_dx[k]) || !std::isfinite(out.dq_dx[k])) return padae::EvalStatus::outside_domain;
+  auto finite = [](const std::vector<double>& values) {
+    return Eigen::Map<const Vector>(values.data(), static_cast<Eigen::Index>(values.size())).allFinite();
+  };
+  if (!out.f.allFinite() || !out.q.allFinite()) return padae::EvalStatus::outside_domain;
+  if (out.jacobian_requested && !(finite(out.df_dx) && finite(out.dq_dx))) return padae::EvalStatus::outside_domain;
   return padae::EvalStatus::ok;
 }
 
@@ -184,8 +188,7 @@ void Model::hold_rows(const Vector& x, padae::Load& out) const {
 }
 
 padae::EvalStatus Model::guards(double t, const Vector& x, Vector& out) const {
-  for (const auto& d : devices_)
-    if (d->predicate_count() > 0) d->guards(t, x, out.data() + d->first_predicate());
+  for (const Device* d : predicate_devices_) d->guards(t, x, out.data() + d->first_predicate());
   for (int k = 0; k < predicate_count_; ++k)
     if (!std::isfinite(out[k])) return padae::EvalStatus::outside_domain;
   return padae::EvalStatus::ok;
@@ -198,14 +201,14 @@ void Model::jump_matrix(double, const Vector&, const padae::Predicates&,
 
 double Model::next_time_event(double t) const {
   double next = infinity;
-  for (const auto& d : devices_) next = std::min(next, d->next_time_event(t));
+  for (const Device* d : time_dependent_devices_) next = std::min(next, d->next_time_event(t));
   return next;
 }
 
 bool Model::time_event_rows(double t, std::vector<int>& rows) const {
   const double corner = next_time_event(t);
   if (corner == infinity) return true;
-  for (const auto& d : devices_) {
+  for (const Device* d : time_dependent_devices_) {
     if (d->next_time_event(t) != corner) continue;
     const std::size_t before = rows.size();
     d->forcing_rows(rows);
@@ -216,7 +219,7 @@ bool Model::time_event_rows(double t, std::vector<int>& rows) const {
 
 double Model::resolution_step() const {
   double step = infinity;
-  for (const auto& d : devices_) step = std::min(step, d->resolution_step());
+  for (const Device* d : time_dependent_devices_) step = std::min(step, d->resolution_step());
   return step;
 }
 

@@ -77,6 +77,10 @@ class Model final : public padae::System {
 
   Unknowns unknowns_;
   std::vector<std::unique_ptr<Device>> devices_;
+  // The devices asked per step for guards and time events (switches and sources among
+  // 1e5 resistors and capacitors).
+  std::vector<const Device*> predicate_devices_;
+  std::vector<const Device*> time_dependent_devices_;
   padae::Pattern pattern_;
   std::vector<padae::UnknownKind> kinds_;
   std::vector<padae::JumpEntry> jump_entries_;

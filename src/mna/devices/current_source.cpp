@@ -18,6 +18,7 @@ class CurrentSource final : public Device {
     e.f(a_, i), e.f(b_, -i);
   }
   void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::current_defined, name()}); }
+  bool time_dependent() const override { return true; }
   double next_time_event(double t) const override { return function_.next_corner(t); }
   void forcing_rows(std::vector<int>& out) const override {
     for (int node : {a_, b_})

@@ -28,6 +28,7 @@ class VoltageSource final : public Device {
     e.df(slot_branch_a_, 1), e.df(slot_branch_b_, -1);
   }
   void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::voltage_defined, name()}); }
+  bool time_dependent() const override { return true; }
   double next_time_event(double t) const override { return function_.next_corner(t); }
   void forcing_rows(std::vector<int>& out) const override { out.push_back(branch_); }
   double resolution_step() const override { return function_.resolution_step(); }

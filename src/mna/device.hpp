@@ -54,6 +54,9 @@ class Unknowns {
   std::unordered_map<std::string, int> nodes_, branches_;
 };
 
+// The value of an unknown in x; 0 for ground.
+inline double value(const Vector& x, int unknown) { return unknown == ground ? 0.0 : x[unknown]; }
+
 // Collects the Jacobian entries of all devices; once the pattern exists, every declared slot
 // is overwritten with its position in the value arrays (or -1 when its row or column is ground).
 class Device;
@@ -105,7 +108,7 @@ class Evaluation {
   const Vector& x;
   const padae::Predicates& p;
 
-  double value(int unknown) const { return unknown == ground ? 0.0 : x[unknown]; }
+  double value(int unknown) const { return mna::value(x, unknown); }
   bool jacobian() const { return out_.jacobian_requested; }
   void f(int row, double value) { if (row != ground) out_.f[row] += value; }
   void q(int row, double value) { if (row != ground) out_.q[row] += value; }
@@ -160,6 +163,14 @@ class Device {
   // Mode the auxiliary unknowns start in (switch ON/OFF); x0 entries of other unknowns are set
   // by the initial conditions.
   virtual void initial_auxiliaries(Vector& x0) const { (void)x0; }
+
+  // Newton's step from x to x_next as the device accepts it (padae::System::newton_step_fraction);
+  // asked only of devices that say they limit.
+  virtual bool limits_newton_steps() const { return false; }
+  virtual double newton_step_fraction(const Vector& x, const Vector& x_next) const {
+    (void)x, (void)x_next;
+    return 1;
+  }
 
   // Whether the device depends on time (an independent source): only such devices are asked
   // for time events, forcing rows and resolution steps.

@@ -142,6 +142,7 @@ Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
   for (const auto& d : devices_) {
     if (d->predicate_count() > 0) predicate_devices_.push_back(d.get());
     if (d->time_dependent()) time_dependent_devices_.push_back(d.get());
+    if (d->limits_newton_steps()) limiting_devices_.push_back(d.get());
   }
   for (std::size_t d = 0; d < devices_.size(); ++d) {
     devices_[d]->set_first_predicate(predicate_count_);
@@ -221,6 +222,12 @@ double Model::resolution_step() const {
   double step = infinity;
   for (const Device* d : time_dependent_devices_) step = std::min(step, d->resolution_step());
   return step;
+}
+
+double Model::newton_step_fraction(const Vector& x, const Vector& x_next) const {
+  double fraction = 1;
+  for (const Device* d : limiting_devices_) fraction = std::min(fraction, d->newton_step_fraction(x, x_next));
+  return fraction;
 }
 
 double Model::absolute_tolerance(int unknown, double) const {

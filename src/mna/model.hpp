@@ -37,6 +37,7 @@ class Model final : public padae::System {
   double next_time_event(double t) const override;
   bool time_event_rows(double t, std::vector<int>& rows) const override;
   double absolute_tolerance(int unknown, double default_atol) const override;
+  double newton_step_fraction(const Vector& x, const Vector& x_next) const override;
 
   // The longest step that resolves every source's time dependence (a bound for
   // padae::Options::max_step: voltages that merely follow a source are not error-tested).
@@ -78,9 +79,10 @@ class Model final : public padae::System {
   Unknowns unknowns_;
   std::vector<std::unique_ptr<Device>> devices_;
   // The devices asked per step for guards and time events (switches and sources among
-  // 1e5 resistors and capacitors).
+  // 1e5 resistors and capacitors), and per Newton iteration for limits.
   std::vector<const Device*> predicate_devices_;
   std::vector<const Device*> time_dependent_devices_;
+  std::vector<const Device*> limiting_devices_;  // junctions
   padae::Pattern pattern_;
   std::vector<padae::UnknownKind> kinds_;
   std::vector<padae::JumpEntry> jump_entries_;

@@ -46,7 +46,8 @@ NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const C
     const double norm = weighted_max_norm(step, inverse_weight);
     if (!std::isfinite(norm)) return NewtonOutcome::diverged;
     if (norm <= tolerance) return converge(step);
-    double damping = 1, simplified_norm = 0;
+    // Damping starts where the model's limits put it (a junction's exponential), then halves.
+    double damping = newton.step_fraction(x, x - step), simplified_norm = 0;
     for (;; damping /= 2) {
       if (damping < kMinDamping) return NewtonOutcome::diverged;
       trial = x - damping * step;

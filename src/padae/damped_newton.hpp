@@ -7,7 +7,8 @@
 // e^(distance / VT) and creeps back one VT per iteration) and stays on the solution branch its
 // start lies on: where that branch has ended (a fold) the corrections stop shrinking and the
 // solve fails, instead of landing on another branch. What damping alone lets through (an iterate
-// that jumps over the fold) is refused by the sign of det J, which a fold reverses.
+// that jumps over the fold) is refused by the sign of det J, which a fold reverses. The damping
+// starts at the fraction of the correction the model accepts (System::newton_step_fraction).
 #pragma once
 
 #include "padae/newton_matrix.hpp"

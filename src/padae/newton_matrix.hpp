@@ -33,6 +33,10 @@ class NewtonMatrix {
                        double lambda, double cj);
 
   void solve(Vector& b) const { lu_.solve(b); }
+  // The fraction of the step from x to x_next the model accepts (System::newton_step_fraction).
+  double step_fraction(const Vector& x, const Vector& x_next) const {
+    return system_.newton_step_fraction(x, x_next);
+  }
   const Load& load() const { return load_; }
   // |dq/dx| summed into row weights: sum_j |dq_ij/dx_j| * scale_j (zero for algebraic rows).
   void charge_scale(const Vector& scale, Vector& out) const;

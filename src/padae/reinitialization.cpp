@@ -64,7 +64,10 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     Vector delta = (load.q - q_start) * cj + load.f;
     for (int i : newton_.auxiliary_unknowns()) delta[i] = x[i] - held[i];
     newton_.solve(delta);
-    x -= delta;
+    // A step the model limits (a junction sent from reverse bias far into conduction) is taken
+    // in part, and shows the matrix's linearization was far off: refactored at the next iterate.
+    const double fraction = newton_.step_fraction(x, x - delta);
+    x -= fraction * delta;
     // The tolerance never asks for less than round-off in x.
     Vector inverse_weight =
         ((options_.rtol + 100 * kEps) * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
@@ -75,13 +78,16 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
       failure_unknown_ = worst;
       return false;
     }
-    if (norm <= kConvergedNorm) return true;
     double rate = norm / previous_norm;
-    // Within the tolerance and no longer contracting with a fresh matrix: the round-off floor
-    // of an ill-conditioned matrix (tight tolerances, floating capacitors), not a failure.
-    if (refactor && norm <= 1 && rate >= 0.5) return true;
-    refactor = rate > kRefactorRate;
-    previous_norm = norm;
+    if (fraction == 1) {
+      if (norm <= kConvergedNorm) return true;
+      // Within the tolerance and no longer contracting with a fresh matrix: the round-off floor
+      // of an ill-conditioned matrix (tight tolerances, floating capacitors), not a failure.
+      if (refactor && norm <= 1 && rate >= 0.5) return true;
+    }
+    refactor = fraction < 1 || rate > kRefactorRate;
+    // After a partial step the iteration starts afresh.
+    previous_norm = fraction < 1 ? std::numeric_limits<double>::infinity() : norm;
     failure_unknown_ = worst;
   }
   failure_reason_ = "Newton's method does not converge in the new mode";

@@ -34,14 +34,15 @@ class SteadyStateSolver {
       Vector delta = newton_.load().f + shift * (x - x_previous);
       for (int i : newton_.auxiliary_unknowns()) delta[i] = x[i] - held[i];
       newton_.solve(delta);
-      x -= delta;
+      const double fraction = newton_.step_fraction(x, x - delta);
+      x -= fraction * delta;
       double norm = 0;
       for (Eigen::Index i = 0; i < x.size(); ++i) {
         double scaled = std::abs(delta[i]) / (options_.rtol * std::abs(x[i]) + absolute_tolerance_[i]);
         if (!(scaled <= norm)) norm = scaled, worst_ = static_cast<int>(i);
       }
       if (!std::isfinite(norm)) return false;
-      if (norm <= kConvergedNorm) return true;
+      if (fraction == 1 && norm <= kConvergedNorm) return true;
     }
     return false;
   }

@@ -100,6 +100,16 @@ class System {
     return false;
   }
 
+  // Newton's step from x to x_next, limited where the model knows its nonlinearity: the largest
+  // fraction of the step it accepts (1: all of it). A junction's exponential, linearized in
+  // reverse bias, sends the next iterate far into forward conduction; SPICE limits the junction
+  // voltage there (pnjlim), padae scales the whole step to that limit. Newton converges only on
+  // a whole step.
+  virtual double newton_step_fraction(const Vector& x, const Vector& x_next) const {
+    (void)x, (void)x_next;
+    return 1;
+  }
+
   // Unknown scale for the tolerance: the absolute tolerance of unknown i in its own units.
   // Default: Options::atol for all.
   virtual double absolute_tolerance(int unknown, double default_atol) const {

@@ -205,6 +205,29 @@ TEST(DeviceLoad, ShockleyDiodeMatchesNgspiceEquations) {
   EXPECT_NEAR(l.f[0], -1e-14 * (1 + arg) - 1e-12, 1e-26);
 }
 
+// Newton's steps into conduction and into breakdown are limited as ngspice's DEVpnjlim limits
+// them (devsup.c, the Berkeley form): VCRIT = VTE ln(VTE / (sqrt 2 IS)); a step past VCRIT by
+// more than 2 VTE stops at VTE ln(v_next / VTE) from reverse bias, at v + VTE ln(1 + (v_next -
+// v) / VTE) from forward bias. Breakdown: the same on -(v + BV) (BV is the knee here).
+TEST(DeviceLoad, ShockleyDiodeLimitsNewtonStepsAsPnjlim) {
+  CircuitSpec c;
+  c.add("d1", {"a", "0"}).model = {{"is", 1e-9}, {"n", 1.5}, {"bv", 50}, {"ibv", 1e-9}};
+  Model m(c, {});
+  const double vte = 1.5 * thermal_voltage, vcrit = vte * std::log(vte / (std::numbers::sqrt2 * 1e-9));
+  auto limited = [&](double v, double v_next) {
+    Vector x(1), x_next(1);
+    x << v, x_next << v_next;
+    return v + m.newton_step_fraction(x, x_next) * (v_next - v);
+  };
+  EXPECT_NEAR(limited(-24, 2e7), vte * std::log(2e7 / vte), 1e-12);
+  EXPECT_NEAR(limited(0.5, 3), 0.5 + vte * std::log(1 + 2.5 / vte), 1e-12);
+  EXPECT_EQ(limited(0.5, vcrit - 1e-3), vcrit - 1e-3);  // ends below VCRIT
+  EXPECT_EQ(limited(0.7, 0.7 + 1.9 * vte), 0.7 + 1.9 * vte);  // within 2 VTE
+  EXPECT_EQ(limited(0.7, -30), -30);  // reverse: the cubic is tame
+  // IBV = IS: the knee is BV itself (diotemp.c).
+  EXPECT_NEAR(limited(-49, -1e4), -50 - vte * std::log((1e4 - 50) / vte), 1e-9);
+}
+
 TEST(DeviceLoad, DiodeJunctionEnergyIsTheIntegralOfVdq) {
   // Below FC VJ: E(v) = integral of u CJO (1 - u/VJ)^-M du, closed form for M = 0.5:
   // with s = 1 - u/VJ: E = CJO VJ^2 [ (2/3) s^(3/2) - 2 s^(1/2) ] from s(0) = 1 to s(v).

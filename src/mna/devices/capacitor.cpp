@@ -21,13 +21,13 @@ class Capacitor final : public Device {
   }
   void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::capacitive, name()}); }
   double stored_energy(const Vector& x) const override {
-    const double v = (a_ == ground ? 0 : x[a_]) - (b_ == ground ? 0 : x[b_]);
+    const double v = value(x, a_) - value(x, b_);
     return 0.5 * capacitance_ * v * v;
   }
   // IC= sets the voltage across: the non-ground node (or node a, relative to node b).
   void initial_condition(Vector& x0) const override {
     if (!initial_voltage_) return;
-    if (a_ != ground) x0[a_] = (b_ == ground ? 0 : x0[b_]) + *initial_voltage_;
+    if (a_ != ground) x0[a_] = value(x0, b_) + *initial_voltage_;
     else if (b_ != ground) x0[b_] = -*initial_voltage_;
   }
 

@@ -1,10 +1,11 @@
 // D: the junction diode with ngspice's equations (level 1: IS, N, RS, CJO, VJ, M, FC, TT, BV,
 // IBV, NBV, area), for regression against ngspice. The junction current, its charge and GMIN in
 // parallel are loaded at the junction voltage; RS adds an internal node.
-// Newton may try huge forward voltages: where the junction current would pass 1 kA (or at 40
-// thermal voltages, whichever comes first) the exponential continues linearly, value and slope
-// matching, so f stays smooth and finite and Newton's overshoots stay moderate. ngspice limits
-// the iterate instead (pnjlim); solutions below that current are the same.
+// Newton's steps into forward conduction (and into breakdown) are limited as ngspice's pnjlim
+// limits them. Past the limit a step may still land at huge forward voltages (modified Newton on
+// a held matrix): where the junction current would pass 1 kA (or at 40 thermal voltages,
+// whichever comes first) the exponential continues linearly, value and slope matching, so f
+// stays smooth and finite; solutions below that current are the same.
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -39,6 +40,8 @@ class Diode final : public Device {
         !(junction_potential_ > 0) || !(grading_ < 1) || !(depletion_fraction_ < 1))
       throw ModelError("diode '" + spec.name + "': parameters out of range (IS, N > 0, RS >= 0, VJ > 0, M < 1, FC < 1)");
     exponent_limit_ = std::min(largest_exponent, std::log(largest_current * area / saturation_current_));
+    critical_voltage_ = critical_voltage(thermal_voltage_);
+    critical_breakdown_voltage_ = critical_voltage(breakdown_thermal_voltage_);
     if (!(exponent_limit_ > 1)) throw ModelError("diode '" + spec.name + "': IS too large");
     if (auto bv = spec.model.find("bv"); bv != spec.model.end() && std::isfinite(bv->second))
       breakdown_voltage_ = breakdown_knee(bv->second, parameter(spec, "ibv", 1e-3) * area, vt, run.reltol);
@@ -77,6 +80,18 @@ class Diode final : public Device {
     e.df(junction_slots_, conductance + gmin);
     if (charged) e.dq(junction_slots_, capacitance);
   }
+  bool limits_newton_steps() const override { return true; }
+  double newton_step_fraction(const Vector& x, const Vector& x_next) const override {
+    const double v = junction_voltage(x), v_next = junction_voltage(x_next);
+    double fraction = junction_step_fraction(v, v_next, thermal_voltage_, critical_voltage_);
+    if (breakdown_voltage_) {
+      const double knee = *breakdown_voltage_;
+      fraction = std::min(fraction, junction_step_fraction(-(v + knee), -(v_next + knee), breakdown_thermal_voltage_,
+                                                           critical_breakdown_voltage_));
+    }
+    return fraction;
+  }
+
   void edges(std::vector<Edge>& out) const override {
     out.push_back({junction_, cathode_, Connection::conductive, name()});
     if (series_resistance_ > 0) out.push_back({anode_, junction_, Connection::conductive, name()});
@@ -86,7 +101,7 @@ class Diode final : public Device {
   // v C(v); only evaluated at events, for the jump energy balance).
   double stored_energy(const Vector& x) const override {
     if (junction_capacitance_ == 0 && transit_time_ == 0) return 0;
-    const double v = (junction_ == ground ? 0 : x[junction_]) - (cathode_ == ground ? 0 : x[cathode_]);
+    const double v = junction_voltage(x);
     constexpr int intervals = 256;
     const double h = v / intervals;
     auto integrand = [&](double u) {
@@ -131,6 +146,25 @@ class Diode final : public Device {
   }
 
  private:
+  double junction_voltage(const Vector& x) const { return value(x, junction_) - value(x, cathode_); }
+
+  // pnjlim's critical voltage, where the current-voltage curve bends most sharply (its radius
+  // of curvature is least). At least vt, so that the limit below stays a forward voltage for
+  // any IS.
+  double critical_voltage(double vt) const {
+    return std::max(vt, vt * std::log(vt / (std::numbers::sqrt2 * saturation_current_)));
+  }
+
+  // The fraction of a step from v to v_next along an exponential exp(v / vt) that pnjlim (in its
+  // Berkeley form) lets through: a step more than 2 vt forward that ends past the critical
+  // voltage stops where the current has grown by the factor the linearization at v promised,
+  // vt ln(v_next / vt) from reverse bias and v + vt ln(1 + (v_next - v) / vt) from forward bias.
+  static double junction_step_fraction(double v, double v_next, double vt, double v_critical) {
+    if (!(v_next > v_critical && v_next - v > 2 * vt)) return 1;
+    const double limited = v > 0 ? v + vt * std::log1p((v_next - v) / vt) : vt * std::log(v_next / vt);
+    return (limited - v) / (v_next - v);
+  }
+
   // exp(x) and its slope, continued linearly above the exponent limit.
   std::pair<double, double> limited_exp(double x) const {
     if (x <= exponent_limit_) {
@@ -158,7 +192,7 @@ class Diode final : public Device {
   std::vector<std::string> nodes_;
   double saturation_current_, thermal_voltage_, breakdown_thermal_voltage_, series_resistance_, junction_capacitance_;
   double junction_potential_, grading_, depletion_fraction_, transit_time_;
-  double exponent_limit_;
+  double exponent_limit_, critical_voltage_, critical_breakdown_voltage_;
   std::optional<double> breakdown_voltage_;
   int anode_ = ground, cathode_ = ground, junction_ = ground;
   Stamper::Block junction_slots_, series_slots_;

@@ -52,7 +52,7 @@ class IdealDiode final : public Device {
   std::string predicate_label(int) const override { return "conducting"; }
   void guards(double, const Vector& x, double* out) const override {
     const bool mode = x[mode_] > 0.5;
-    out[0] = mode ? x[branch_] : (a_ == ground ? 0 : x[a_]) - (k_ == ground ? 0 : x[k_]) - forward_voltage_;
+    out[0] = mode ? x[branch_] : value(x, a_) - value(x, k_) - forward_voltage_;
   }
   void jump_entries(std::vector<padae::JumpEntry>& out) const override {
     out.push_back({mode_, first_predicate(), 1.0});

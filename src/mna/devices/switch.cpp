@@ -77,7 +77,7 @@ class Switch final : public Device {
   int predicate_count() const override { return 1; }
   std::string predicate_label(int) const override { return "on"; }
   void guards(double, const Vector& x, double* out) const override {
-    const double control = current_controlled_ ? x[c_] : (c_ == ground ? 0 : x[c_]) - (d_ == ground ? 0 : x[d_]);
+    const double control = current_controlled_ ? x[c_] : value(x, c_) - value(x, d_);
     const bool state = x[state_] > 0.5;
     out[0] = state ? control - (threshold_ - hysteresis_) : control - (threshold_ + hysteresis_);
   }

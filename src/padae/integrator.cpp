@@ -132,6 +132,13 @@ struct Integrator::Impl {
   // x at t_at inside the last step as a step of its order from its start would reach it
   // (dense_output.hpp); the polynomial's x where that cannot be solved.
   Vector step_solution(DenseOutput& solver, double t_at) const;
+  // The accepted step whose polynomial interpolate() and step_solution() use (its end may be
+  // another step's end too: both steps of a restart inside a step can end on the same corner).
+  long last_step_number() const { return after_restart() ? previous_step.number : statistics.steps; }
+  // step_solution() for the guards (events, passed corners), remembered for the output rows at
+  // the same instants.
+  Vector located_solution(double t_at);
+  const Vector* remembered_solution(double t_at) const;
 
   // --- events ----------------------------------------------------------------------------
   bool evaluate_guards(double t_at, const Vector& x_at, Vector& out) const;
@@ -161,6 +168,13 @@ struct Integrator::Impl {
   // the integration: neither its kept factorization nor its statistics).
   std::unique_ptr<DenseOutput> location_solver, output_solver;
   Statistics output_statistics;
+  // The located solutions in accepted step number located_step.
+  struct Located {
+    double t;
+    Vector x;
+  };
+  std::vector<Located> located;
+  long located_step = -1;
 
   // The solution.
   double t = 0;
@@ -195,6 +209,7 @@ struct Integrator::Impl {
     std::array<Vector, kHistory> phi_x, phi_q;
     std::array<double, kHistory> psi{};
     Predicates p;  // the mode the step was taken in
+    long number = 0;  // counted in statistics.steps
   } previous_step;
   bool after_restart() const { return order_used == 0 && previous_step.order > 0; }
   static Vector evaluate_polynomial(double anchor_at, int order_of, const std::array<Vector, kHistory>& phi,
@@ -664,7 +679,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     Vector guards_left = guards_old;
     for (double passed = next_time_event; passed < t; passed = system.next_time_event(passed)) {
       Vector guards_passed(predicate_count);
-      if (!evaluate_guards(passed, step_solution(locator(), passed), guards_passed))
+      if (!evaluate_guards(passed, located_solution(passed), guards_passed))
         return fail(passed, "a guard function cannot be evaluated at t = " + format_time(passed));
       if (crossed(guards_passed)) return handle_state_event(t_left, guards_left, passed, guards_passed);
       t_left = passed;
@@ -715,13 +730,13 @@ StepOutcome Integrator::Impl::handle_state_event(double t_left, const Vector& gu
   // Locate the earliest crossing on the solution inside the step: on the interpolating
   // polynomial itself an algebraic unknown (a source's node) is off by the polynomial's error,
   // and a guard on it crosses early or late.
-  auto guards_at = [&](double t_at, Vector& out) { return evaluate_guards(t_at, step_solution(locator(), t_at), out); };
+  auto guards_at = [&](double t_at, Vector& out) { return evaluate_guards(t_at, located_solution(t_at), out); };
   const double tolerance = 100 * kEps * (std::abs(t_right) + std::abs(h_used));
   Crossing crossing = locate_first_crossing(guards_at, p, t_left, guards_left, t_right, guards_right, tolerance);
   if (!crossing.ok) return fail(t, "a guard function cannot be evaluated while locating an event near t = " + format_time(t));
 
   const double t_event = crossing.t_right;
-  const Vector x_before = step_solution(locator(), t_event);
+  const Vector x_before = located_solution(t_event);
   Predicates target = p;
   for (int k = 0; k < predicate_count; ++k) target[k] = crossing.guards_right[k] > 0;
   // Accumulation (Zeno): events closer than the time resolution, or intervals shrinking
@@ -890,6 +905,23 @@ Vector Integrator::Impl::evaluate_polynomial(double anchor_at, int order_of, con
   return result;
 }
 
+Vector Integrator::Impl::located_solution(double t_at) {
+  if (const Vector* remembered = remembered_solution(t_at)) return *remembered;
+  if (located_step != last_step_number()) {
+    located.clear();
+    located_step = last_step_number();
+  }
+  located.push_back({t_at, step_solution(locator(), t_at)});
+  return located.back().x;
+}
+
+const Vector* Integrator::Impl::remembered_solution(double t_at) const {
+  if (located_step != last_step_number()) return nullptr;
+  for (const Located& point : located)
+    if (point.t == t_at) return &point.x;
+  return nullptr;
+}
+
 Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
   const bool previous = after_restart();
   const double step_end = previous ? previous_step.anchor : anchor;
@@ -931,7 +963,7 @@ Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
 
 // Order 1 from a consistent state, as after the initial point (IDA's first step).
 void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
-  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, phi_q, psi, step_predicates};
+  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, phi_q, psi, step_predicates, statistics.steps};
   anchor = t_at;
   t = t_at;
   x = consistent.x;
@@ -1000,6 +1032,8 @@ bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   s.x = x0;
   s.p = p0;
   s.h = 0;
+  s.located.clear();
+  s.located_step = -1;
   s.update_weights();
   // The initial point is made consistent as an event is (jump projection, predicate fixed
   // point); that is the start, not an event, so it is neither counted nor recorded.
@@ -1022,6 +1056,7 @@ const Statistics& Integrator::statistics() const { return impl_->statistics; }
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
 Vector Integrator::dense_output(double t_at) {
   Impl& s = *impl_;
+  if (const Vector* located = s.remembered_solution(t_at)) return *located;
   if (!s.output_solver) s.output_solver = std::make_unique<DenseOutput>(s.system, s.output_statistics, s.options, s.absolute_tolerance);
   return s.step_solution(*s.output_solver, t_at);
 }

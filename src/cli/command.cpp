@@ -12,6 +12,7 @@
 #include <fstream>
 #include <memory>
 #include <regex>
+#include <span>
 
 #include "cli/output/waveform_writer.hpp"
 #include "cli/probes.hpp"
@@ -69,7 +70,11 @@ class Waveforms {
   void begin(const std::vector<Probe>& probes) {
     probes_ = probes;
     std::vector<std::string> names;
-    for (const auto& p : probes) names.push_back(p.name);
+    for (const auto& p : probes) {
+      names.push_back(p.name);
+      for (int unknown : {p.plus, p.minus})
+        if (unknown != mna::ground && std::find(read_.begin(), read_.end(), unknown) == read_.end()) read_.push_back(unknown);
+    }
     values_.resize(probes.size());
     for (auto& w : writers_) w->begin(names);
   }
@@ -85,11 +90,14 @@ class Waveforms {
   void finish() {
     for (auto& w : writers_) w->finish();
   }
+  // The unknowns the columns read.
+  std::span<const int> unknowns_read() const { return read_; }
 
  private:
   std::vector<std::unique_ptr<output::WaveformWriter>> writers_;
   std::vector<Probe> probes_;
   std::vector<double> values_;
+  std::vector<int> read_;
 };
 
 // --events: one line per predicate flip; the energy is that the whole event's jump dissipated.
@@ -392,7 +400,7 @@ class Session {
     for (double corner = model_->next_time_event(t_before);;) {
       const double t_row = std::min(corner, grid_point(next_grid_));
       if (t_row >= t_after) break;
-      emit(t_row, integrator_->dense_output(t_row));
+      emit(t_row, integrator_->dense_output(t_row, waveforms_.unknowns_read()));
       if (t_row == corner) corner = model_->next_time_event(corner);
       if (t_row == grid_point(next_grid_)) ++next_grid_;
     }

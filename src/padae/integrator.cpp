@@ -25,6 +25,7 @@
 #include <limits>
 #include <numeric>
 #include <optional>
+#include <span>
 #include <sstream>
 
 #include "padae/damped_newton.hpp"
@@ -132,6 +133,12 @@ struct Integrator::Impl {
   // x at t_at inside the last step as a step of its order from its start would reach it
   // (dense_output.hpp); the polynomial's x where that cannot be solved.
   Vector step_solution(DenseOutput& solver, double t_at) const;
+  // Whether the last step's polynomial is as good as its solution for these unknowns. The error
+  // test controls the charges only: the polynomial of an algebraic unknown, or of a hidden
+  // algebraic direction, is measured once per step, at its midpoint (where a polynomial's error
+  // between its points peaks), against step_solution there. A source corner the step passed
+  // reaches only algebraic unknowns (time_event_rows), which bend there where no polynomial can.
+  bool polynomial_serves(std::span<const int> unknowns);
   // The accepted step whose polynomial interpolate() and step_solution() use (its end may be
   // another step's end too: both steps of a restart inside a step can end on the same corner).
   long last_step_number() const { return after_restart() ? previous_step.number : statistics.steps; }
@@ -168,6 +175,14 @@ struct Integrator::Impl {
   // the integration: neither its kept factorization nor its statistics).
   std::unique_ptr<DenseOutput> location_solver, output_solver;
   Statistics output_statistics;
+  std::vector<int> every_unknown;  // 0 ... n - 1, what dense_output(t) asks for
+  DenseOutput& writer();
+  // Per unknown, the distance of step number `step`'s polynomial from its solution at the
+  // step's midpoint, in tolerance units (polynomial_serves).
+  struct MidpointCheck {
+    long step = -1;
+    Vector miss;
+  } midpoint_check;
   // The located solutions in accepted step number located_step.
   struct Located {
     double t;
@@ -210,7 +225,9 @@ struct Integrator::Impl {
     std::array<double, kHistory> psi{};
     Predicates p;  // the mode the step was taken in
     long number = 0;  // counted in statistics.steps
+    bool corner_inside = false;  // the step passed a source corner
   } previous_step;
+  bool corner_inside = false;  // the last step passed a source corner
   bool after_restart() const { return order_used == 0 && previous_step.order > 0; }
   static Vector evaluate_polynomial(double anchor_at, int order_of, const std::array<Vector, kHistory>& phi,
                                     const std::array<double, kHistory>& psi_of, double t_at,
@@ -250,6 +267,8 @@ Integrator::Impl::Impl(System& system_in, Options options_in)
       newton(system_in, statistics, absolute_tolerance / options_in.rtol),
       reinitializer(system_in, newton, statistics, options, absolute_tolerance) {
   options.max_order = std::clamp(options.max_order, 1, options.method == Method::trapezoidal ? 2 : kMaxOrder);
+  every_unknown.resize(n);
+  std::iota(every_unknown.begin(), every_unknown.end(), 0);
   for (auto& v : phi_x) v.setZero(n);
   for (auto& v : phi_q) v.setZero(n);
 
@@ -664,6 +683,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       continue;
     }
     complete_step(error_k, error_k_minus_1, order_new);
+    corner_inside = next_time_event < t_new;
     t = t_new;
     anchor = t_new;
     x = x_new;
@@ -905,6 +925,28 @@ Vector Integrator::Impl::evaluate_polynomial(double anchor_at, int order_of, con
   return result;
 }
 
+bool Integrator::Impl::polynomial_serves(std::span<const int> unknowns) {
+  const bool previous = after_restart();
+  if ((previous ? previous_step.order : order_used) == 0) return true;  // a point: no step yet
+  if (previous ? previous_step.corner_inside : corner_inside)
+    for (int i : unknowns)
+      if (system.kind(i) == UnknownKind::algebraic) return false;
+  if (midpoint_check.step != last_step_number()) {
+    const double midpoint = previous ? previous_step.anchor - previous_step.psi[0] / 2 : anchor - psi[0] / 2;
+    midpoint_check.step = last_step_number();
+    midpoint_check.miss =
+        (step_solution(writer(), midpoint) - interpolate(midpoint)).cwiseAbs().cwiseProduct(inverse_weight_x);
+  }
+  for (int i : unknowns)
+    if (midpoint_check.miss[i] > 1) return false;
+  return true;
+}
+
+DenseOutput& Integrator::Impl::writer() {
+  if (!output_solver) output_solver = std::make_unique<DenseOutput>(system, output_statistics, options, absolute_tolerance);
+  return *output_solver;
+}
+
 Vector Integrator::Impl::located_solution(double t_at) {
   if (const Vector* remembered = remembered_solution(t_at)) return *remembered;
   if (located_step != last_step_number()) {
@@ -963,7 +1005,8 @@ Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
 
 // Order 1 from a consistent state, as after the initial point (IDA's first step).
 void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
-  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, phi_q, psi, step_predicates, statistics.steps};
+  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, phi_q, psi, step_predicates, statistics.steps,
+                                               corner_inside};
   anchor = t_at;
   t = t_at;
   x = consistent.x;
@@ -1034,6 +1077,7 @@ bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   s.h = 0;
   s.located.clear();
   s.located_step = -1;
+  s.midpoint_check.step = -1;
   s.update_weights();
   // The initial point is made consistent as an event is (jump projection, predicate fixed
   // point); that is the start, not an event, so it is neither counted nor recorded.
@@ -1054,11 +1098,12 @@ const Failure& Integrator::failure() const { return impl_->failure; }
 const Statistics& Integrator::statistics() const { return impl_->statistics; }
 
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
-Vector Integrator::dense_output(double t_at) {
+Vector Integrator::dense_output(double t_at) { return dense_output(t_at, impl_->every_unknown); }
+Vector Integrator::dense_output(double t_at, std::span<const int> unknowns) {
   Impl& s = *impl_;
   if (const Vector* located = s.remembered_solution(t_at)) return *located;
-  if (!s.output_solver) s.output_solver = std::make_unique<DenseOutput>(s.system, s.output_statistics, s.options, s.absolute_tolerance);
-  return s.step_solution(*s.output_solver, t_at);
+  if (s.polynomial_serves(unknowns)) return s.interpolate(t_at);
+  return s.step_solution(s.writer(), t_at);
 }
 
 }  // namespace padae

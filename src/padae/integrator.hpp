@@ -16,6 +16,7 @@
 
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -134,7 +135,12 @@ class Integrator {
   // Dense output for writing: the BDF step from the last step's start to t (dense_output.hpp),
   // so that the unknowns the error test does not control (algebraic ones, hidden algebraic
   // directions) are consistent. Falls back to the interpolating polynomial where Newton fails.
+  // The interpolating polynomial itself serves where it is as accurate as that solution (measured
+  // once per step, at its midpoint).
   Vector dense_output(double t);
+  // The same for the listed unknowns only (the others may be off by more than the tolerance):
+  // the polynomial serves more often.
+  Vector dense_output(double t, std::span<const int> unknowns);
 
   const EventRecord& last_event() const;
   const Failure& failure() const;

@@ -139,16 +139,15 @@ Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
       kinds_[i] = charged[i] ? padae::UnknownKind::differential : padae::UnknownKind::algebraic;
   }
 
-  for (const auto& d : devices_) {
-    if (d->predicate_count() > 0) predicate_devices_.push_back(d.get());
-    if (d->time_dependent()) time_dependent_devices_.push_back(d.get());
-    if (d->limits_newton_steps()) limiting_devices_.push_back(d.get());
-  }
-  for (std::size_t d = 0; d < devices_.size(); ++d) {
-    devices_[d]->set_first_predicate(predicate_count_);
-    predicate_count_ += devices_[d]->predicate_count();
-    predicate_owners_.insert(predicate_owners_.end(), devices_[d]->predicate_count(), static_cast<int>(d));
-    devices_[d]->jump_entries(jump_entries_);
+  for (std::size_t index = 0; index < devices_.size(); ++index) {
+    Device* d = devices_[index].get();
+    if (d->predicate_count() > 0) predicate_devices_.push_back(d);
+    if (d->time_dependent()) time_dependent_devices_.push_back(d);
+    if (d->limits_newton_steps()) limiting_devices_.push_back(d);
+    d->set_first_predicate(predicate_count_);
+    predicate_count_ += d->predicate_count();
+    predicate_owners_.insert(predicate_owners_.end(), d->predicate_count(), static_cast<int>(index));
+    d->jump_entries(jump_entries_);
   }
 
   // Positions of every entry in each held row, to overwrite the row during the operating point.

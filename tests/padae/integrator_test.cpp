@@ -144,9 +144,10 @@ TEST(Integrator, DenseOutputInterpolatesWithinTheStep) {
 
 // x' = 1e-6 y, 0 = y - sin(10 t): the steps follow x, which barely moves; y is not error-tested,
 // so its interpolating polynomial is poor between steps (hundreds of y's tolerances), and dense
-// output solves for it. Where the step's predictor of y was within y's tolerance, the
-// polynomial serves: dense output is then within y's tolerance, not round-off. Dense output of
-// x alone (the polynomial, wherever x's predictor was close) stays as accurate as the steps.
+// output solves for it. Where the step's polynomial of y was within y's tolerance of the
+// solution at the step's midpoint, the polynomial serves: dense output is then within y's
+// tolerance, not round-off. Dense output of x alone (mostly the polynomial) stays as accurate as
+// the steps.
 class DrivenAlgebraic : public SemiExplicitSystem {
  public:
   DrivenAlgebraic() : SemiExplicitSystem({D, A}) {}

@@ -60,6 +60,13 @@ constexpr double kConfirmingDrift = 1;
 // The first step after a restart is sized so that backward Euler's local error h^2 q''/2 would be
 // half the tolerance (IDA's target), the first step's error test being backward Euler's.
 constexpr double kRestartCurvatureBound = 1;
+// The start-up after a restart raises the order with each step up to this one. The trapezoidal
+// start leaves a history exact to order 2 (the Hermite quadratic through a virtual point): the
+// higher divided differences are more the virtual point's than the solution's, and so are the
+// estimates made from them (buck converter: order-4 start-up steps failed the error test by 10x
+// where the order-3 step's estimate of order 4 let them pass). The order rises further once
+// real points fill the history (IDA's order selection, after k + 1 steps of one size).
+constexpr int kStartupOrder = 3;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 // Zeno behaviour: this many consecutive event intervals, each shrinking by this ratio or more,
 // are taken as events accumulating toward a finite time.
@@ -235,7 +242,6 @@ struct Integrator::Impl {
   int order = 1, order_used = 0, constant_steps = 0;
   bool virtual_point_in_history = false;  // the trapezoidal start's (complete_step)
   bool startup_phase = true;
-  int steps_since_restart = 0;
   double h = 0, h_used = 0, cj = 0, error_coefficient = 0;
   // The step the error control chose for the last step, before it was shortened to end on a
   // source corner or a stop: a restart there starts from it (the shortened step says nothing
@@ -532,21 +538,14 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
   const int order_change = order - order_used;
   order_used = order;
   h_used = h;
-  if (order_new == order - 1 || order == options.max_order) startup_phase = false;
+  if (order_new == order - 1 || order >= std::min(options.max_order, kStartupOrder)) startup_phase = false;
 
   const double h_max = options.max_step > 0 ? options.max_step : std::numeric_limits<double>::infinity();
   // IDA's start-up: raise the order and double the step until a step fails or the order
-  // drops. It also ends where the error estimate forbids doubling even at this order: that
-  // step would fail.
-  if (startup_phase && steps_since_restart > 0 && step_ratio(error_k, order) < 2)
-    startup_phase = false;
+  // drops; here only up to kStartupOrder.
   if (startup_phase) {
-    // IDA keeps the first step's size once, as it came from an estimate; after the
-    // trapezoidal start the history is of order 2 at once (below).
-    if (++steps_since_restart > 1 || started) {
-      order = std::min(order + 1, options.max_order);
-      h = std::min(2 * h, h_max);
-    }
+    order = std::min(order + 1, options.max_order);
+    h = std::min(2 * h, h_max);
   } else if (options.method == Method::trapezoidal) {
     // Back to the trapezoidal order after any backward-Euler step (repeated failures).
     order = options.max_order;
@@ -1043,7 +1042,6 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   cj = 1 / h;
   constant_steps = 0;
   startup_phase = true;
-  steps_since_restart = 0;
 }
 
 // --- Integrator ------------------------------------------------------------------------------

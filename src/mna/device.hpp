@@ -7,6 +7,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <memory_resource>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -57,12 +58,33 @@ class Unknowns {
 // The value of an unknown in x; 0 for ground.
 inline double value(const Vector& x, int unknown) { return unknown == ground ? 0.0 : x[unknown]; }
 
+class Device;
+// Where a model's devices live: one arena, in the order they are made, so that an evaluation
+// streams through them instead of visiting objects scattered among their node names (1.1e5-
+// unknown RC ladder: 34.8 s -> 26.3 s). The arena frees the memory; its owner destroys the
+// devices first.
+class DeviceArena {
+ public:
+  struct Destroy {
+    void operator()(Device* device) const;
+  };
+  using Pointer = std::unique_ptr<Device, Destroy>;
+  template <class Kind, class... Arguments>
+  Pointer make(Arguments&&... arguments) {
+    void* memory = memory_.allocate(sizeof(Kind), alignof(Kind));
+    return Pointer(new (memory) Kind(std::forward<Arguments>(arguments)...));
+  }
+
+ private:
+  std::pmr::monotonic_buffer_resource memory_;
+};
+using DevicePointer = DeviceArena::Pointer;
+
 // Collects the Jacobian entries of all devices; once the pattern exists, every declared slot
 // is overwritten with its position in the value arrays (or -1 when its row or column is ground).
-class Device;
 class Stamper {
  public:
-  Stamper(Unknowns& unknowns, const std::vector<std::unique_ptr<Device>>& devices)
+  Stamper(Unknowns& unknowns, const std::vector<DevicePointer>& devices)
       : unknowns_(unknowns), devices_(devices) {}
   Unknowns& unknowns() { return unknowns_; }
   // Another device by name (K reads its inductors), or nullptr.
@@ -95,7 +117,7 @@ class Stamper {
     bool charge;
   };
   Unknowns& unknowns_;
-  const std::vector<std::unique_ptr<Device>>& devices_;
+  const std::vector<DevicePointer>& devices_;
   std::vector<Declared> declared_;
 };
 
@@ -195,8 +217,11 @@ class Device {
   int first_predicate_ = 0;
 };
 
-// Factories keyed by element letter ("d:ideal" for the ideal diode model).
-using DeviceFactory = std::function<std::unique_ptr<Device>(const ElementSpec&, const RunSettings&)>;
+inline void DeviceArena::Destroy::operator()(Device* device) const { device->~Device(); }
+
+// Factories keyed by element letter ("d:ideal" for the ideal diode model); they make the device
+// in the arena.
+using DeviceFactory = std::function<DevicePointer(const ElementSpec&, const RunSettings&, DeviceArena&)>;
 class DeviceRegistry {
  public:
   static DeviceRegistry& instance();

@@ -111,7 +111,7 @@ Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
     if (!names.insert(spec.name).second) throw ModelError("element '" + spec.name + "' is defined twice");
     const DeviceFactory* factory = DeviceRegistry::instance().find(registry_key(spec));
     if (!factory) throw ModelError("element '" + spec.name + "': unsupported element type");
-    devices_.push_back((*factory)(spec, settings));
+    devices_.push_back((*factory)(spec, settings, device_memory_));
   }
   for (auto& d : devices_) d->allocate(unknowns_);
 

@@ -45,7 +45,7 @@ class Model final : public padae::System {
 
   void set_tolerances(const Tolerances& tolerances) { tolerances_ = tolerances; }
   const Unknowns& unknowns() const { return unknowns_; }
-  const std::vector<std::unique_ptr<Device>>& devices() const { return devices_; }
+  const std::vector<DevicePointer>& devices() const { return devices_; }
   // Node index or ground; -2 when the circuit has no such node.
   int find_node(const std::string& name) const;
 
@@ -77,7 +77,8 @@ class Model final : public padae::System {
   void hold_rows(const Vector& x, padae::Load& out) const;
 
   Unknowns unknowns_;
-  std::vector<std::unique_ptr<Device>> devices_;
+  DeviceArena device_memory_;  // before devices_: destroyed after them
+  std::vector<DevicePointer> devices_;
   // The devices asked per step for guards and time events (switches and sources among
   // 1e5 resistors and capacitors), and per Newton iteration for limits.
   std::vector<const Device*> predicate_devices_;

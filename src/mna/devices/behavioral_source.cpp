@@ -69,8 +69,8 @@ class BehavioralSource final : public Device {
   int slot_a_branch_ = -1, slot_b_branch_ = -1, slot_branch_a_ = -1, slot_branch_b_ = -1;
 };
 
-const Registration registration("b", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<BehavioralSource>(spec);
+const Registration registration("b", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<BehavioralSource>(spec);
 });
 
 }  // namespace

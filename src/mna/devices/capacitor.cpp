@@ -39,8 +39,8 @@ class Capacitor final : public Device {
   Stamper::Block slots_;
 };
 
-const Registration registration("c", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Capacitor>(spec);
+const Registration registration("c", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Capacitor>(spec);
 });
 
 }  // namespace

@@ -30,8 +30,8 @@ class Cccs final : public Device {
   int a_ = ground, b_ = ground, control_ = ground, slot_a_ = -1, slot_b_ = -1;
 };
 
-const Registration registration("f", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Cccs>(spec);
+const Registration registration("f", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Cccs>(spec);
 });
 
 }  // namespace

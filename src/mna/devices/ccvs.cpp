@@ -39,8 +39,8 @@ class Ccvs final : public Device {
   int slot_a_branch_ = -1, slot_b_branch_ = -1, slot_branch_a_ = -1, slot_branch_b_ = -1, slot_branch_control_ = -1;
 };
 
-const Registration registration("h", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Ccvs>(spec);
+const Registration registration("h", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Ccvs>(spec);
 });
 
 }  // namespace

@@ -32,8 +32,8 @@ class CurrentSource final : public Device {
   int a_ = ground, b_ = ground;
 };
 
-const Registration registration("i", [](const ElementSpec& spec, const RunSettings& run) {
-  return std::make_unique<CurrentSource>(spec, run);
+const Registration registration("i", [](const ElementSpec& spec, const RunSettings& run, DeviceArena& arena) {
+  return arena.make<CurrentSource>(spec, run);
 });
 
 }  // namespace

@@ -198,8 +198,8 @@ class Diode final : public Device {
   Stamper::Block junction_slots_, series_slots_;
 };
 
-const Registration registration("d", [](const ElementSpec& spec, const RunSettings& run) {
-  return std::make_unique<Diode>(spec, run);
+const Registration registration("d", [](const ElementSpec& spec, const RunSettings& run, DeviceArena& arena) {
+  return arena.make<Diode>(spec, run);
 });
 
 }  // namespace

@@ -65,8 +65,8 @@ class IdealDiode final : public Device {
   int slot_a_branch_ = -1, slot_k_branch_ = -1, slot_branch_a_ = -1, slot_branch_k_ = -1, slot_branch_branch_ = -1;
 };
 
-const Registration registration("d:ideal", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<IdealDiode>(spec);
+const Registration registration("d:ideal", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<IdealDiode>(spec);
 });
 
 }  // namespace

@@ -40,8 +40,8 @@ void Inductor::initial_condition(Vector& x0) const {
 }
 
 namespace {
-const Registration registration("l", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Inductor>(spec);
+const Registration registration("l", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Inductor>(spec);
 });
 }  // namespace
 

@@ -38,8 +38,8 @@ class MutualInductance final : public Device {
   int branch1_ = ground, branch2_ = ground, slot12_ = -1, slot21_ = -1;
 };
 
-const Registration registration("k", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<MutualInductance>(spec);
+const Registration registration("k", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<MutualInductance>(spec);
 });
 
 }  // namespace

@@ -27,8 +27,8 @@ class Resistor final : public Device {
   Stamper::Block slots_;
 };
 
-const Registration registration("r", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Resistor>(spec);
+const Registration registration("r", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Resistor>(spec);
 });
 
 }  // namespace

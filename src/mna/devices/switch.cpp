@@ -99,11 +99,11 @@ class Switch final : public Device {
   int slot_a_branch_ = -1, slot_b_branch_ = -1, slot_branch_a_ = -1, slot_branch_b_ = -1, slot_branch_branch_ = -1;
 };
 
-const Registration voltage_controlled("s", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Switch>(spec, false);
+const Registration voltage_controlled("s", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Switch>(spec, false);
 });
-const Registration current_controlled("w", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Switch>(spec, true);
+const Registration current_controlled("w", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Switch>(spec, true);
 });
 
 }  // namespace

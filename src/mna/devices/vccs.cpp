@@ -32,8 +32,8 @@ class Vccs final : public Device {
   int slots_[4] = {-1, -1, -1, -1};
 };
 
-const Registration registration("g", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Vccs>(spec);
+const Registration registration("g", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Vccs>(spec);
 });
 
 }  // namespace

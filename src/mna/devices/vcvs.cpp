@@ -37,8 +37,8 @@ class Vcvs final : public Device {
   int slot_a_branch_ = -1, slot_b_branch_ = -1, slot_row_[4] = {-1, -1, -1, -1};
 };
 
-const Registration registration("e", [](const ElementSpec& spec, const RunSettings&) {
-  return std::make_unique<Vcvs>(spec);
+const Registration registration("e", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Vcvs>(spec);
 });
 
 }  // namespace

@@ -44,8 +44,8 @@ class VoltageSource final : public Device {
   int slot_a_branch_ = -1, slot_b_branch_ = -1, slot_branch_a_ = -1, slot_branch_b_ = -1;
 };
 
-const Registration registration("v", [](const ElementSpec& spec, const RunSettings& run) {
-  return std::make_unique<VoltageSource>(spec, run);
+const Registration registration("v", [](const ElementSpec& spec, const RunSettings& run, DeviceArena& arena) {
+  return arena.make<VoltageSource>(spec, run);
 });
 
 }  // namespace

@@ -63,9 +63,9 @@ constexpr double kRestartCurvatureBound = 1;
 // The start-up after a restart raises the order with each step up to this one. The trapezoidal
 // start leaves a history exact to order 2 (the Hermite quadratic through a virtual point): the
 // higher divided differences are more the virtual point's than the solution's, and so are the
-// estimates made from them (buck converter: order-4 start-up steps failed the error test by 10x
-// where the order-3 step's estimate of order 4 let them pass). The order rises further once
-// real points fill the history (IDA's order selection, after k + 1 steps of one size).
+// estimates made from them (buck converter: order-4 start-up steps failed the error test by up to
+// 19x, about ten times what the order-3 step's estimate of order 4 predicted). The order rises
+// further once real points fill the history (IDA's order selection, after k + 1 steps of one size).
 constexpr int kStartupOrder = 3;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 // Zeno behaviour: this many consecutive event intervals, each shrinking by this ratio or more,

@@ -143,8 +143,9 @@ struct Integrator::Impl {
   // Whether the last step's polynomial is as good as its solution for these unknowns. The error
   // test controls the charges only: the polynomial of an algebraic unknown, or of a hidden
   // algebraic direction, is measured once per step, at its midpoint (near where the error of a
-  // polynomial between its last two points is largest), against step_solution there. A source corner the step passed
-  // reaches only algebraic unknowns (time_event_rows), which bend there where no polynomial can.
+  // polynomial between its last two points is largest), against step_solution there. A source
+  // corner the step passed reaches only algebraic unknowns (time_event_rows), which bend there
+  // where no polynomial can.
   bool polynomial_serves(std::span<const int> unknowns);
   // The accepted step whose polynomial interpolate() and step_solution() use (its end may be
   // another step's end too: both steps of a restart inside a step can end on the same corner).

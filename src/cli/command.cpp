@@ -204,15 +204,18 @@ class StopSignals {
   void (*previous_[3])(int) = {};
 };
 
-void print_statistics(const padae::Statistics& s, int unknowns, double t_end, double wall) {
+// output: the Newton work of rows written inside steps (Integrator::output_statistics).
+void print_statistics(const padae::Statistics& s, const padae::Statistics& output, int unknowns, double t_end,
+                      double wall) {
   fmt::print(stderr,
              "{{\"steps\": {}, \"rejected\": {}, \"rejected_error_test\": {}, \"rejected_newton\": {}, "
              "\"rejected_domain\": {}, \"newton_iterations\": {}, \"jacobians\": {}, "
-             "\"lu_factorizations\": {}, \"events\": {}, \"time_events\": {}, \"jumps\": {}, \"unknowns\": {}, "
+             "\"lu_factorizations\": {}, \"events\": {}, \"time_events\": {}, \"jumps\": {}, "
+             "\"output_newton_iterations\": {}, \"output_lu_factorizations\": {}, \"unknowns\": {}, "
              "\"t_end\": {}, \"wall_s\": {:.6f}}}\n",
              s.steps, s.rejected_error_test + s.rejected_newton + s.rejected_domain, s.rejected_error_test,
              s.rejected_newton, s.rejected_domain, s.newton_iterations, s.jacobians, s.lu_factorizations, s.events,
-             s.time_events, s.jumps, unknowns, t_end, wall);
+             s.time_events, s.jumps, output.newton_iterations, output.lu_factorizations, unknowns, t_end, wall);
 }
 
 
@@ -368,7 +371,8 @@ class Session {
     }
     if (!temporary_csv_.empty()) std::filesystem::remove(temporary_csv_);
     if (options_.stats && integrator_)
-      print_statistics(integrator_->statistics(), model_->size(), integrator_->time(), wall_seconds());
+      print_statistics(integrator_->statistics(), integrator_->output_statistics(), model_->size(),
+                       integrator_->time(), wall_seconds());
     return status;
   }
 

@@ -36,6 +36,11 @@ class DenseOutput {
                               const Vector& q_polynomial, const Vector& q_derivative,
                               const Predicates& p, double c);
 
+  // NewtonMatrix::charge_determined on this solver's matrix (its factorization is kept).
+  EvalStatus charge_determined(double t, const Vector& x, const Predicates& p, std::vector<char>& out) {
+    return newton_.charge_determined(t, x, p, out);
+  }
+
  private:
   Statistics& statistics_;
   NewtonMatrix newton_;    // kept from row to row while it stays close to the matrix at x

@@ -141,12 +141,14 @@ struct Integrator::Impl {
   // (dense_output.hpp); the polynomial's x where that cannot be solved.
   Vector step_solution(DenseOutput& solver, double t_at) const;
   // Whether the last step's polynomial is as good as its solution for these unknowns. The error
-  // test controls the charges only: the polynomial of an algebraic unknown, or of a hidden
-  // algebraic direction, is measured once per step, at its midpoint (near where the error of a
-  // polynomial between its last two points is largest), against step_solution there. A source
-  // corner the step passed reaches only algebraic unknowns (time_event_rows), which bend there
-  // where no polynomial can.
+  // test controls the charges, and so the unknowns that are functions of one charge each. The
+  // polynomial of any other unknown (an algebraic one, or one in a hidden algebraic direction
+  // such as a floating capacitor's common mode) is measured once per step, at its midpoint
+  // (near where the error of a polynomial between its last two points is largest), against
+  // step_solution there. A source corner the step passed reaches only algebraic unknowns
+  // (time_event_rows), which bend there where no polynomial can.
   bool polynomial_serves(std::span<const int> unknowns);
+  bool charges_determine(std::span<const int> unknowns);
   // The accepted step whose polynomial interpolate() and step_solution() use (its end may be
   // another step's end too: both steps of a restart inside a step can end on the same corner).
   long last_step_number() const { return after_restart() ? previous_step.number : statistics.steps; }
@@ -191,6 +193,11 @@ struct Integrator::Impl {
     long step = -1;
     Vector miss;
   } midpoint_check;
+  // NewtonMatrix::charge_determined in mode `mode` (a mode may switch charges in or out).
+  struct ChargeDetermined {
+    Predicates mode;
+    std::vector<char> unknowns;
+  } charge_determined;
   // The located solutions in accepted step number located_step.
   struct Located {
     double t;
@@ -931,6 +938,7 @@ bool Integrator::Impl::polynomial_serves(std::span<const int> unknowns) {
   if (previous ? previous_step.corner_inside : corner_inside)
     for (int i : unknowns)
       if (system.kind(i) == UnknownKind::algebraic) return false;
+  if (charges_determine(unknowns)) return true;
   if (midpoint_check.step != last_step_number()) {
     const double midpoint = previous ? previous_step.anchor - previous_step.psi[0] / 2 : anchor - psi[0] / 2;
     midpoint_check.step = last_step_number();
@@ -939,6 +947,21 @@ bool Integrator::Impl::polynomial_serves(std::span<const int> unknowns) {
   }
   for (int i : unknowns)
     if (midpoint_check.miss[i] > 1) return false;
+  return true;
+}
+
+bool Integrator::Impl::charges_determine(std::span<const int> unknowns) {
+  const bool previous = after_restart();
+  const Predicates& mode = previous ? previous_step.p : step_predicates;
+  if (charge_determined.unknowns.empty() || charge_determined.mode != mode) {
+    charge_determined.mode = mode;
+    const double step_end = previous ? previous_step.anchor : anchor;
+    const Vector& x_end = previous ? previous_step.phi_x[0] : phi_x[0];
+    if (writer().charge_determined(step_end, x_end, mode, charge_determined.unknowns) != EvalStatus::ok)
+      charge_determined.unknowns.assign(static_cast<std::size_t>(n), 0);
+  }
+  for (int i : unknowns)
+    if (!charge_determined.unknowns[i]) return false;
   return true;
 }
 
@@ -1095,6 +1118,7 @@ double Integrator::step_size() const { return impl_->h_used; }
 const EventRecord& Integrator::last_event() const { return impl_->last_event; }
 const Failure& Integrator::failure() const { return impl_->failure; }
 const Statistics& Integrator::statistics() const { return impl_->statistics; }
+const Statistics& Integrator::output_statistics() const { return impl_->output_statistics; }
 
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
 Vector Integrator::dense_output(double t_at) { return dense_output(t_at, impl_->every_unknown); }

@@ -135,8 +135,9 @@ class Integrator {
   // Dense output for writing: the BDF step from the last step's start to t (dense_output.hpp),
   // so that the unknowns the error test does not control (algebraic ones, hidden algebraic
   // directions) are consistent. Falls back to the interpolating polynomial where Newton fails.
-  // The interpolating polynomial itself serves where it is as accurate as that solution (measured
-  // once per step, at its midpoint).
+  // The interpolating polynomial itself serves for unknowns that are functions of one charge
+  // each (the error test controls them), and for others where it is as accurate as that
+  // solution (measured once per step, at its midpoint).
   Vector dense_output(double t);
   // The same for the listed unknowns only (the others may be off by more than the tolerance):
   // the polynomial serves more often.
@@ -145,6 +146,8 @@ class Integrator {
   const EventRecord& last_event() const;
   const Failure& failure() const;
   const Statistics& statistics() const;
+  // The Newton work of dense_output(), counted apart: writing never changes the integration.
+  const Statistics& output_statistics() const;
 
  private:
   struct Impl;

@@ -158,6 +158,26 @@ double NewtonMatrix::drift(const Predicates& p, double cj) const {
   return largest_drift;
 }
 
+EvalStatus NewtonMatrix::charge_determined(double t, const Vector& x, const Predicates& p,
+                                           std::vector<char>& out) {
+  if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return EvalStatus::outside_domain;
+  const auto& starts = pattern_.column_starts();
+  const auto& rows = pattern_.row_indices();
+  const int n = pattern_.size();
+  // Per row: its charge's only unknown so far, -1 before any, -2 after a second.
+  std::vector<int> only_unknown(static_cast<std::size_t>(n), -1);
+  for (int column = 0; column < n; ++column)
+    for (int k = starts[column]; k < starts[column + 1]; ++k) {
+      if (load_.dq_dx[k] == 0) continue;
+      int& only = only_unknown[rows[k]];
+      only = only == -1 ? column : -2;
+    }
+  out.assign(static_cast<std::size_t>(n), 0);
+  for (int only : only_unknown)
+    if (only >= 0) out[only] = 1;
+  return EvalStatus::ok;
+}
+
 NewtonMatrix::Outcome NewtonMatrix::factor_shifted(double t, const Vector& x, const Predicates& p,
                                                    double shift) {
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;

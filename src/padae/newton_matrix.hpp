@@ -40,6 +40,10 @@ class NewtonMatrix {
   const Load& load() const { return load_; }
   // |dq/dx| summed into row weights: sum_j |dq_ij/dx_j| * scale_j (zero for algebraic rows).
   void charge_scale(const Vector& scale, Vector& out) const;
+  // Per unknown, whether some row's charge depends on it alone (that row of dq/dx at (t, x, p)
+  // has its one non-zero in the unknown's column): the unknown is then a function of that
+  // charge, as a grounded capacitor's node voltage or an inductor's current.
+  EvalStatus charge_determined(double t, const Vector& x, const Predicates& p, std::vector<char>& out);
   // Zeroes the entries of v on algebraic rows (no dq/dx in the last factorization).
   void keep_dynamic_rows(Vector& v) const;
   int singular_column() const { return lu_.singular_column(); }

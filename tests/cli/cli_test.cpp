@@ -164,7 +164,8 @@ TEST_F(Cli, JumpGivesTwoRowsAtTheSameTimeAndIsLogged) {
   EXPECT_NEAR(log.rows[0][5], 0.5 * (1e-6 * 2e-6 / 3e-6) * 16, 1e-15);
   // --stats: one JSON object with the counters.
   for (const char* key : {"\"steps\"", "\"rejected\"", "\"newton_iterations\"", "\"jacobians\"", "\"lu_factorizations\"",
-                          "\"events\": 1", "\"jumps\": 1", "\"unknowns\"", "\"wall_s\""})
+                          "\"events\": 1", "\"jumps\": 1", "\"output_newton_iterations\"", "\"unknowns\"",
+                          "\"wall_s\""})
     EXPECT_NE(r.err.find(key), std::string::npos) << key << " in " << r.err;
 }
 

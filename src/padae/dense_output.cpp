@@ -12,8 +12,8 @@ namespace padae {
 namespace {
 
 constexpr int kMaxIterations = 100;      // junctions far from their solution need many
-constexpr double kConvergedNorm = 1e-2;  // Newton correction, in tolerance units
-constexpr double kFastContraction = 0.1;  // modified Newton goes on while it contracts this fast
+constexpr double kConvergedNorm = 1e-2;  // the corrections still to come, in tolerance units
+constexpr double kFastContraction = 0.5;  // modified Newton goes on while it contracts this fast
 // The factorization held serves the next row while its drift from the matrix at Newton's
 // start (NewtonMatrix::drift) is within this: modified Newton then contracts about as fast as
 // on a fresh matrix, so a small first correction is as telling. A matrix from another
@@ -31,10 +31,21 @@ DenseOutput::DenseOutput(System& system, Statistics& statistics, const Options& 
       options_(options),
       absolute_tolerance_(absolute_tolerance) {}
 
-std::optional<Vector> DenseOutput::solve(double t, const Vector& x_guess, const Vector& x_polynomial,
+std::optional<Vector> DenseOutput::solve(long step, double t, const Vector* x_guess, const Vector& x_polynomial,
                                          const Vector& q_polynomial, const Vector& q_derivative,
                                          const Predicates& p, double c) {
   if (!(c > 0) || !std::isfinite(c)) return std::nullopt;
+  const Vector start = x_guess ? *x_guess
+                       : last_.step == step ? Vector(last_.x + (x_polynomial - last_.x_polynomial))
+                                            : x_polynomial;
+  std::optional<Vector> x = solve_from(start, t, x_polynomial, q_polynomial, q_derivative, p, c);
+  if (x) last_ = {step, *x, x_polynomial};
+  return x;
+}
+
+std::optional<Vector> DenseOutput::solve_from(const Vector& x_guess, double t, const Vector& x_polynomial,
+                                              const Vector& q_polynomial, const Vector& q_derivative,
+                                              const Predicates& p, double c) {
   const CorrectorEquation equation{t, c, q_polynomial, q_derivative, x_polynomial, p};
   // Weighted on the polynomial's scale, not the iterate's: a diverging iterate must not loosen
   // its own test. The tolerance never asks for less than round-off in x.
@@ -51,8 +62,12 @@ std::optional<Vector> DenseOutput::solve(double t, const Vector& x_guess, const 
     corrector_correction(newton_, equation, x, residual_, delta_);
     x -= delta_;
     const double norm = weighted_max_norm(delta_, inverse_weight_);
-    if (!std::isfinite(norm) || norm > kFastContraction * previous_norm) break;
-    if (norm <= kConvergedNorm) return x;
+    if (!std::isfinite(norm)) break;
+    const double rate = norm / previous_norm;
+    if (rate > kFastContraction) break;
+    // The corrections still to come, from the contraction so far (IDA's test); the first
+    // correction, with no rate yet, counts as it is.
+    if ((iteration == 0 ? norm : rate / (1 - rate) * norm) <= kConvergedNorm) return x;
     if (newton_.evaluate(t, x, p) != EvalStatus::ok) break;
     previous_norm = norm;
   }

@@ -29,10 +29,12 @@ class DenseOutput {
   DenseOutput(System& system, Statistics& statistics, const Options& options,
               const Vector& absolute_tolerance);
 
-  // x at t inside a step taken in mode p, for the c above, with Newton from x_guess; S gives
-  // x_polynomial (the value of auxiliary unknowns), q_polynomial and q_derivative. Empty where
-  // Newton fails.
-  std::optional<Vector> solve(double t, const Vector& x_guess, const Vector& x_polynomial,
+  // x at t inside step number `step` (taken in mode p), for the c above; S gives x_polynomial
+  // (the value of auxiliary unknowns), q_polynomial and q_derivative. Newton starts from
+  // x_guess if given, else from the last solution inside the same step moved as S moved since
+  // (S's own error changes little from one row to the next: a floating node's common mode can
+  // be volts off on S), else from S. Empty where Newton fails.
+  std::optional<Vector> solve(long step, double t, const Vector* x_guess, const Vector& x_polynomial,
                               const Vector& q_polynomial, const Vector& q_derivative,
                               const Predicates& p, double c);
 
@@ -42,11 +44,19 @@ class DenseOutput {
   }
 
  private:
+  std::optional<Vector> solve_from(const Vector& x_guess, double t, const Vector& x_polynomial,
+                                   const Vector& q_polynomial, const Vector& q_derivative, const Predicates& p,
+                                   double c);
+
   Statistics& statistics_;
   NewtonMatrix newton_;    // kept from row to row while it stays close to the matrix at x
   const Options& options_;
   const Vector& absolute_tolerance_;
   Vector residual_, delta_, inverse_weight_;
+  struct Solution {
+    long step = -1;
+    Vector x, x_polynomial;
+  } last_;
 };
 
 }  // namespace padae

@@ -1003,10 +1003,9 @@ Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
   // stays within kMaxStiffening of its value at the step's end, where q is pinned to S within
   // a thousandth of the step's residual anyway.
   const double c_max = kMaxStiffening * c_at(step_end);
-  // Newton from guess, or from the polynomial's x without one.
+  // Newton from guess, or without one from where DenseOutput::solve chooses.
   auto solve_at = [&](double t_of, const Vector* guess) {
-    const Vector x_polynomial = interpolate(t_of);
-    return solver.solve(t_of, guess ? *guess : x_polynomial, x_polynomial,
+    return solver.solve(last_step_number(), t_of, guess, interpolate(t_of),
                         interpolate(t_of, Interpolated::value, Quantity::q),
                         interpolate(t_of, Interpolated::derivative, Quantity::q), step_mode,
                         std::min(c_at(t_of), c_max));

@@ -35,11 +35,18 @@ std::optional<Vector> DenseOutput::solve(long step, double t, const Vector* x_gu
                                          const Vector& q_polynomial, const Vector& q_derivative,
                                          const Predicates& p, double c) {
   if (!(c > 0) || !std::isfinite(c)) return std::nullopt;
-  const Vector start = x_guess ? *x_guess
-                       : last_.step == step ? Vector(last_.x + (x_polynomial - last_.x_polynomial))
-                                            : x_polynomial;
-  std::optional<Vector> x = solve_from(start, t, x_polynomial, q_polynomial, q_derivative, p, c);
-  if (x) last_ = {step, *x, x_polynomial};
+  const Vector* start = x_guess ? x_guess : &x_polynomial;
+  if (!x_guess && last_.step == step) {
+    shifted_start_ = last_.x + (x_polynomial - last_.x_polynomial);
+    start = &shifted_start_;
+  }
+  std::optional<Vector> x = solve_from(*start, t, x_polynomial, q_polynomial, q_derivative, p, c);
+  if (x) {
+    // Assigned in place: the vectors keep their storage from row to row.
+    last_.step = step;
+    last_.x = *x;
+    last_.x_polynomial = x_polynomial;
+  }
   return x;
 }
 

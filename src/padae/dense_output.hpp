@@ -52,7 +52,7 @@ class DenseOutput {
   NewtonMatrix newton_;    // kept from row to row while it stays close to the matrix at x
   const Options& options_;
   const Vector& absolute_tolerance_;
-  Vector residual_, delta_, inverse_weight_;
+  Vector residual_, delta_, inverse_weight_, shifted_start_;
   struct Solution {
     long step = -1;
     Vector x, x_polynomial;

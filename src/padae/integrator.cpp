@@ -149,9 +149,20 @@ struct Integrator::Impl {
   // (time_event_rows), which bend there where no polynomial can.
   bool polynomial_serves(std::span<const int> unknowns);
   bool charges_determine(std::span<const int> unknowns);
-  // The accepted step whose polynomial interpolate() and step_solution() use (its end may be
-  // another step's end too: both steps of a restart inside a step can end on the same corner).
-  long last_step_number() const { return after_restart() ? previous_step.number : statistics.steps; }
+  // The accepted step whose polynomial interpolate() and step_solution() use: previous_step
+  // after a restart, else the current history's (its end may be another step's end too: both
+  // steps of a restart inside a step can end on the same corner).
+  struct StepView {
+    double anchor;  // the step's end
+    int order;
+    const std::array<Vector, kHistory>& phi_x;
+    const std::array<Vector, kHistory>& phi_q;
+    const std::array<double, kHistory>& psi;
+    const Predicates& p;  // the mode the step was taken in
+    long number;          // counted in statistics.steps
+    bool corner_inside;   // the step passed a source corner
+  };
+  StepView last_step() const;
   // step_solution() for the guards (events, passed corners), remembered for the output rows at
   // the same instants.
   Vector located_solution(double t_at);
@@ -907,11 +918,16 @@ double Integrator::Impl::first_step_estimate(double t_at, const Vector& x_at) {
 // IDA's IDAGetSolution (IDAGetDky for the derivative): the interpolating polynomial of the
 // last step.
 Vector Integrator::Impl::interpolate(double t_at, Interpolated what, Quantity of) const {
-  const bool of_x = of == Quantity::x;
+  const StepView step = last_step();
+  return evaluate_polynomial(step.anchor, step.order, of == Quantity::x ? step.phi_x : step.phi_q, step.psi, t_at,
+                             what);
+}
+
+Integrator::Impl::StepView Integrator::Impl::last_step() const {
   if (after_restart())
-    return evaluate_polynomial(previous_step.anchor, previous_step.order,
-                               of_x ? previous_step.phi_x : previous_step.phi_q, previous_step.psi, t_at, what);
-  return evaluate_polynomial(anchor, order_used, of_x ? phi_x : phi_q, psi, t_at, what);
+    return {previous_step.anchor, previous_step.order, previous_step.phi_x, previous_step.phi_q,
+            previous_step.psi, previous_step.p, previous_step.number, previous_step.corner_inside};
+  return {anchor, order_used, phi_x, phi_q, psi, step_predicates, statistics.steps, corner_inside};
 }
 
 // sum_j c_j(t) phi_j, with c_j the product over i < j of (t - anchor + psi_{i-1}) / psi_i
@@ -933,15 +949,15 @@ Vector Integrator::Impl::evaluate_polynomial(double anchor_at, int order_of, con
 }
 
 bool Integrator::Impl::polynomial_serves(std::span<const int> unknowns) {
-  const bool previous = after_restart();
-  if ((previous ? previous_step.order : order_used) == 0) return true;  // a point: no step yet
-  if (previous ? previous_step.corner_inside : corner_inside)
+  const StepView step = last_step();
+  if (step.order == 0) return true;  // a point: no step yet
+  if (step.corner_inside)
     for (int i : unknowns)
       if (system.kind(i) == UnknownKind::algebraic) return false;
   if (charges_determine(unknowns)) return true;
-  if (midpoint_check.step != last_step_number()) {
-    const double midpoint = previous ? previous_step.anchor - previous_step.psi[0] / 2 : anchor - psi[0] / 2;
-    midpoint_check.step = last_step_number();
+  if (midpoint_check.step != step.number) {
+    const double midpoint = step.anchor - step.psi[0] / 2;
+    midpoint_check.step = step.number;
     midpoint_check.miss =
         (step_solution(writer(), midpoint) - interpolate(midpoint)).cwiseAbs().cwiseProduct(inverse_weight_x);
   }
@@ -951,13 +967,10 @@ bool Integrator::Impl::polynomial_serves(std::span<const int> unknowns) {
 }
 
 bool Integrator::Impl::charges_determine(std::span<const int> unknowns) {
-  const bool previous = after_restart();
-  const Predicates& mode = previous ? previous_step.p : step_predicates;
-  if (charge_determined.unknowns.empty() || charge_determined.mode != mode) {
-    charge_determined.mode = mode;
-    const double step_end = previous ? previous_step.anchor : anchor;
-    const Vector& x_end = previous ? previous_step.phi_x[0] : phi_x[0];
-    if (writer().charge_determined(step_end, x_end, mode, charge_determined.unknowns) != EvalStatus::ok)
+  const StepView step = last_step();
+  if (charge_determined.unknowns.empty() || charge_determined.mode != step.p) {
+    charge_determined.mode = step.p;
+    if (writer().charge_determined(step.anchor, step.phi_x[0], step.p, charge_determined.unknowns) != EvalStatus::ok)
       charge_determined.unknowns.assign(static_cast<std::size_t>(n), 0);
   }
   for (int i : unknowns)
@@ -972,50 +985,46 @@ DenseOutput& Integrator::Impl::writer() {
 
 Vector Integrator::Impl::located_solution(double t_at) {
   if (const Vector* remembered = remembered_solution(t_at)) return *remembered;
-  if (located_step != last_step_number()) {
+  if (located_step != last_step().number) {
     located.clear();
-    located_step = last_step_number();
+    located_step = last_step().number;
   }
   located.push_back({t_at, step_solution(locator(), t_at)});
   return located.back().x;
 }
 
 const Vector* Integrator::Impl::remembered_solution(double t_at) const {
-  if (located_step != last_step_number()) return nullptr;
+  if (located_step != last_step().number) return nullptr;
   for (const Located& point : located)
     if (point.t == t_at) return &point.x;
   return nullptr;
 }
 
 Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
-  const bool previous = after_restart();
-  const double step_end = previous ? previous_step.anchor : anchor;
-  const int step_order = previous ? previous_step.order : order_used;
-  const auto& step_psi = previous ? previous_step.psi : psi;
-  const Predicates& step_mode = previous ? previous_step.p : step_predicates;
+  const StepView step = last_step();
   // The points S passes through before the step's end are t_j = end - psi_j, j < order.
   auto c_at = [&](double t_of) {
     double sum = 0;
-    for (int j = 0; j < step_order; ++j) sum += 1 / (t_of - (step_end - step_psi[j]));
+    for (int j = 0; j < step.order; ++j) sum += 1 / (t_of - (step.anchor - step.psi[j]));
     return sum;
   };
   // Close to the step's start c grows without bound, and with it the matrix's condition: c
   // stays within kMaxStiffening of its value at the step's end, where q is pinned to S within
   // a thousandth of the step's residual anyway.
-  const double c_max = kMaxStiffening * c_at(step_end);
+  const double c_max = kMaxStiffening * c_at(step.anchor);
   // Newton from guess, or without one from where DenseOutput::solve chooses.
   auto solve_at = [&](double t_of, const Vector* guess) {
-    return solver.solve(last_step_number(), t_of, guess, interpolate(t_of),
+    return solver.solve(step.number, t_of, guess, interpolate(t_of),
                         interpolate(t_of, Interpolated::value, Quantity::q),
-                        interpolate(t_of, Interpolated::derivative, Quantity::q), step_mode,
+                        interpolate(t_of, Interpolated::derivative, Quantity::q), step.p,
                         std::min(c_at(t_of), c_max));
   };
-  if (step_order == 0) return interpolate(t_at);
+  if (step.order == 0) return interpolate(t_at);
   if (auto solved = solve_at(t_at, nullptr)) return std::move(*solved);
   // Newton from the polynomial can fail where it is far from the solution (the common mode of
   // a load floating between junctions): continuation from the step's start, where the state is
   // known, through points each twice as far from it, each solve starting from the last.
-  const double step_start = step_end - step_psi[0];
+  const double step_start = step.anchor - step.psi[0];
   Vector x = interpolate(step_start);
   for (int halvings = kContinuationHalvings; halvings >= 0; --halvings) {
     auto solved = solve_at(step_start + std::ldexp(t_at - step_start, -halvings), &x);

@@ -136,6 +136,8 @@ struct Integrator::Impl {
   enum class Interpolated { value, derivative };
   enum class Quantity { x, q };
   Vector interpolate(double t_at, Interpolated what = Interpolated::value, Quantity of = Quantity::x) const;
+  // The value of x's polynomial for the listed unknowns only, into out (sized n).
+  void interpolate(double t_at, std::span<const int> unknowns, Vector& out) const;
   double first_step_estimate(double t_at, const Vector& x_at);
   // x at t_at inside the last step as a step of its order from its start would reach it
   // (dense_output.hpp); the polynomial's x where that cannot be solved.
@@ -196,6 +198,7 @@ struct Integrator::Impl {
   // the integration: neither its kept factorization nor its statistics).
   std::unique_ptr<DenseOutput> location_solver, output_solver;
   Statistics output_statistics;
+  Vector output_row;  // dense_output()'s for the listed unknowns
   std::vector<int> every_unknown;  // 0 ... n - 1, what dense_output(t) asks for
   DenseOutput& writer();
   // Per unknown, the distance of step number `step`'s polynomial from its solution at the
@@ -255,9 +258,11 @@ struct Integrator::Impl {
   } previous_step;
   bool corner_inside = false;  // the last step passed a source corner
   bool after_restart() const { return order_used == 0 && previous_step.order > 0; }
-  static Vector evaluate_polynomial(double anchor_at, int order_of, const std::array<Vector, kHistory>& phi,
-                                    const std::array<double, kHistory>& psi_of, double t_at,
-                                    Interpolated what);
+  // The weights of the polynomial sum_j w_j phi_j (its value or derivative at t_at) of a step
+  // that ended at anchor_at; w_j = 0 above the order.
+  static std::array<double, kHistory> polynomial_weights(double anchor_at, int order_of,
+                                                         const std::array<double, kHistory>& psi_of, double t_at,
+                                                         Interpolated what);
   int order = 1, order_used = 0, constant_steps = 0;
   bool virtual_point_in_history = false;  // the trapezoidal start's (complete_step)
   bool startup_phase = true;
@@ -919,8 +924,21 @@ double Integrator::Impl::first_step_estimate(double t_at, const Vector& x_at) {
 // last step.
 Vector Integrator::Impl::interpolate(double t_at, Interpolated what, Quantity of) const {
   const StepView step = last_step();
-  return evaluate_polynomial(step.anchor, step.order, of == Quantity::x ? step.phi_x : step.phi_q, step.psi, t_at,
-                             what);
+  const auto weights = polynomial_weights(step.anchor, step.order, step.psi, t_at, what);
+  const auto& phi = of == Quantity::x ? step.phi_x : step.phi_q;
+  Vector result = weights[0] * phi[0];
+  for (int j = 1; j <= step.order; ++j) result += weights[j] * phi[j];
+  return result;
+}
+
+void Integrator::Impl::interpolate(double t_at, std::span<const int> unknowns, Vector& out) const {
+  const StepView step = last_step();
+  const auto weights = polynomial_weights(step.anchor, step.order, step.psi, t_at, Interpolated::value);
+  for (int i : unknowns) {
+    double value = step.phi_x[0][i];
+    for (int j = 1; j <= step.order; ++j) value += weights[j] * step.phi_x[j][i];
+    out[i] = value;
+  }
 }
 
 Integrator::Impl::StepView Integrator::Impl::last_step() const {
@@ -930,22 +948,23 @@ Integrator::Impl::StepView Integrator::Impl::last_step() const {
   return {anchor, order_used, phi_x, phi_q, psi, step_predicates, statistics.steps, corner_inside};
 }
 
-// sum_j c_j(t) phi_j, with c_j the product over i < j of (t - anchor + psi_{i-1}) / psi_i
-// (psi_{-1} = 0); the derivative differentiates the products.
-Vector Integrator::Impl::evaluate_polynomial(double anchor_at, int order_of, const std::array<Vector, kHistory>& phi,
-                                             const std::array<double, kHistory>& psi_of, double t_at,
-                                             Interpolated what) {
+// w_j = c_j(t), the product over i < j of (t - anchor + psi_{i-1}) / psi_i (psi_{-1} = 0); the
+// derivative differentiates the products.
+std::array<double, kHistory> Integrator::Impl::polynomial_weights(double anchor_at, int order_of,
+                                                                  const std::array<double, kHistory>& psi_of,
+                                                                  double t_at, Interpolated what) {
   const bool derivative = what == Interpolated::derivative;
-  Vector result = derivative ? Vector::Zero(phi[0].size()) : phi[0];
+  std::array<double, kHistory> weights{};
+  weights[0] = derivative ? 0 : 1;
   double delta_t = t_at - anchor_at;
   double c = 1, c_derivative = 0, gam = delta_t / psi_of[0];
   for (int j = 1; j <= order_of; ++j) {
     c_derivative = c_derivative * gam + c / psi_of[j - 1];
     c *= gam;
     gam = (delta_t + psi_of[j - 1]) / psi_of[j];
-    result += (derivative ? c_derivative : c) * phi[j];
+    weights[j] = derivative ? c_derivative : c;
   }
-  return result;
+  return weights;
 }
 
 bool Integrator::Impl::polynomial_serves(std::span<const int> unknowns) {
@@ -1130,11 +1149,16 @@ const Statistics& Integrator::output_statistics() const { return impl_->output_s
 
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
 Vector Integrator::dense_output(double t_at) { return dense_output(t_at, impl_->every_unknown); }
-Vector Integrator::dense_output(double t_at, std::span<const int> unknowns) {
+const Vector& Integrator::dense_output(double t_at, std::span<const int> unknowns) {
   Impl& s = *impl_;
   if (const Vector* located = s.remembered_solution(t_at)) return *located;
-  if (s.polynomial_serves(unknowns)) return s.interpolate(t_at);
-  return s.step_solution(s.writer(), t_at);
+  if (s.polynomial_serves(unknowns)) {
+    s.output_row.resize(s.n);
+    s.interpolate(t_at, unknowns, s.output_row);
+  } else {
+    s.output_row = s.step_solution(s.writer(), t_at);
+  }
+  return s.output_row;
 }
 
 }  // namespace padae

@@ -139,9 +139,9 @@ class Integrator {
   // each (the error test controls them), and for others where it is as accurate as that
   // solution (measured once per step, at its midpoint).
   Vector dense_output(double t);
-  // The same for the listed unknowns only (the others may be off by more than the tolerance):
-  // the polynomial serves more often.
-  Vector dense_output(double t, std::span<const int> unknowns);
+  // The same for the listed unknowns only: the polynomial serves more often, and is evaluated
+  // for them alone. The other entries are not computed. Valid until the next call.
+  const Vector& dense_output(double t, std::span<const int> unknowns);
 
   const EventRecord& last_event() const;
   const Failure& failure() const;

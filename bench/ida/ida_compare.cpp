@@ -626,7 +626,7 @@ int main(int argc, char** argv) {
   // padae_ida_compare [min CPU seconds per configuration] [problem name]
   const double budget = argc > 1 ? std::atof(argv[1]) : 0.2;
   const std::string only = argc > 2 ? argv[2] : "";
-  const std::vector<double> tolerances = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11};
+  const std::vector<double> tolerances = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13};
   std::printf("{\"sundials\": \"%s\", \"problems\": [\n", SUNDIALS_VERSION);
   bool first_problem = true;
   for (const Problem& problem : problems()) {

@@ -10,6 +10,16 @@ namespace {
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 
+// The card's text with every blank a space or a tab, the blanks the grammar skips: a form feed or
+// vertical tab taken into a name would not survive printing (the line ends are trimmed of them).
+// Same length, so that columns stay right.
+std::string with_plain_blanks(std::string_view content) {
+  std::string text(content);
+  for (char& c : text)
+    if (is_blank(c) && c != '\t') c = ' ';
+  return text;
+}
+
 // The directive of a line whose content starts with '.', lower case ("control", "end", ...).
 std::string directive_of(std::string_view content) {
   std::string directive;
@@ -92,12 +102,12 @@ SplitFile split_lines(const std::shared_ptr<const SourceFile>& file, bool has_ti
       LogicalLine& card = result.cards.back();
       card.text += ' ';
       card.pieces.push_back({card.text.size(), number, where.begin.column + 1});
-      card.text.append(content.substr(1));
+      card.text += with_plain_blanks(content.substr(1));
       continue;
     }
     LogicalLine card;
     card.file = file;
-    card.text = std::string(content);
+    card.text = with_plain_blanks(content);
     card.pieces.push_back({0, number, where.begin.column});
     result.cards.push_back(std::move(card));
   }

@@ -43,6 +43,18 @@ TEST(RoundTrip, ALoneDollarIsNoName) {
   expect_round_trip("t\nR$1 a$b $c 1\n", "dollar.cir");
 }
 
+// A form feed or vertical tab inside a card separates words as a space does (found by the
+// fuzzer: ".subckt oute\v x y" took "oute\v" as the name, and its printed ".ends oute\v" lost
+// the trailing blank, closing a subcircuit of another name).
+TEST(RoundTrip, FormFeedAndVerticalTabSeparateWords) {
+  netlist::Diagnostics diagnostics;
+  auto parsed = netlist::parse_text("t\n.subckt sub\v x\fy\nR1 x y 1\n.ends sub\nX1 a\vb sub\nR2 a b 1\n",
+                                    "blanks.cir", diagnostics);
+  ASSERT_FALSE(diagnostics.has_errors()) << diagnostics.to_string();
+  EXPECT_EQ(netlist::print(parsed), "t\n.subckt sub x y\nr1 x y 1\n.ends sub\nx1 a b sub\nr2 a b 1\n.end\n");
+  expect_round_trip("t\n.subckt oute\v x y pa\n.ends\nV1 in 0 1\n", "blanks.cir");
+}
+
 TEST(RoundTrip, PrintsTheExpectedText) {
   netlist::Diagnostics diagnostics;
   auto parsed = netlist::parse_text(

@@ -254,14 +254,13 @@ class Session {
     integrator_options_.max_step = flat->tran && flat->tran->max_step ? *flat->tran->max_step
                                                                       : (settings_.tstop - tstart_) / 50;
     try {
-      circuit_ = mna::circuit_from_netlist(*flat);
-      model_ = std::make_unique<mna::Model>(circuit_, settings_);
+      model_ = std::make_unique<mna::Model>(mna::circuit_from_netlist(*flat), settings_);
       model_->set_tolerances(tolerances);
       integrator_options_.max_step = std::min(integrator_options_.max_step, model_->resolution_step());
       mna::check_structure(*model_, start_kind());
       if (!options_.probes.empty()) probes_ = parse_probes(options_.probes, *model_);
-      else if (!flat->saves.empty()) probes_ = requested_probes(flat->saves, *model_, circuit_);
-      else probes_ = default_probes(*model_, circuit_);
+      else if (!flat->saves.empty()) probes_ = requested_probes(flat->saves, *model_);
+      else probes_ = default_probes(*model_);
     } catch (const mna::ModelError& e) {
       print_error(e.what());
       return bad_input;
@@ -417,7 +416,6 @@ class Session {
   double tstart_ = 0;
   bool uic_ = false;
   padae::Options integrator_options_;
-  mna::CircuitSpec circuit_;
   std::unique_ptr<mna::Model> model_;
   std::vector<Probe> probes_;
   Waveforms waveforms_;

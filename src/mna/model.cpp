@@ -102,12 +102,12 @@ std::string registry_key(const ElementSpec& spec) {
 
 }  // namespace
 
-Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
+Model::Model(CircuitSpec circuit, const RunSettings& settings) : circuit_(std::move(circuit)) {
   // Circuit nodes first, in order of appearance, so that v(...) unknowns come first.
-  for (const auto& spec : circuit.elements)
+  for (const auto& spec : circuit_.elements)
     for (const auto& n : spec.nodes) unknowns_.node(n);
   std::unordered_set<std::string> names;
-  for (const auto& spec : circuit.elements) {
+  for (const auto& spec : circuit_.elements) {
     if (!names.insert(spec.name).second) throw ModelError("element '" + spec.name + "' is defined twice");
     const DeviceFactory* factory = DeviceRegistry::instance().find(registry_key(spec));
     if (!factory) throw ModelError("element '" + spec.name + "': unsupported element type");
@@ -117,12 +117,12 @@ Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
 
   Stamper stamper(unknowns_, devices_);
   for (auto& d : devices_) d->declare(stamper);
-  for (const auto& [name, value] : circuit.initial_voltages) {
+  for (const auto& [name, value] : circuit_.initial_voltages) {
     const int n = find_node(name);
     if (n == -2) throw ModelError(".ic names node '" + name + "', which is not in the circuit");
     if (n != ground) held_nodes_[n] = value;
   }
-  for (const auto& [name, value] : circuit.nodesets) {
+  for (const auto& [name, value] : circuit_.nodesets) {
     const int n = find_node(name);
     if (n == -2) throw ModelError(".nodeset names node '" + name + "', which is not in the circuit");
     if (n != ground) nodesets_[n] = value;
@@ -139,14 +139,15 @@ Model::Model(const CircuitSpec& circuit, const RunSettings& settings) {
       kinds_[i] = charged[i] ? padae::UnknownKind::differential : padae::UnknownKind::algebraic;
   }
 
-  for (std::size_t index = 0; index < devices_.size(); ++index) {
-    Device* d = devices_[index].get();
-    if (d->predicate_count() > 0) predicate_devices_.push_back(d);
+  for (const auto& device : devices_) {
+    Device* d = device.get();
     if (d->time_dependent()) time_dependent_devices_.push_back(d);
     if (d->limits_newton_steps()) limiting_devices_.push_back(d);
-    d->set_first_predicate(predicate_count_);
+    if (d->predicate_count() == 0) continue;
+    d->number_predicates(predicate_count_);
+    predicate_owners_.insert(predicate_owners_.end(), d->predicate_count(), static_cast<int>(predicate_devices_.size()));
+    predicate_devices_.push_back({d, predicate_count_});
     predicate_count_ += d->predicate_count();
-    predicate_owners_.insert(predicate_owners_.end(), d->predicate_count(), static_cast<int>(index));
     d->jump_entries(jump_entries_);
   }
 
@@ -188,7 +189,7 @@ void Model::hold_rows(const Vector& x, padae::Load& out) const {
 }
 
 padae::EvalStatus Model::guards(double t, const Vector& x, Vector& out) const {
-  for (const Device* d : predicate_devices_) d->guards(t, x, out.data() + d->first_predicate());
+  for (const auto& [d, first] : predicate_devices_) d->guards(t, x, out.data() + first);
   for (int k = 0; k < predicate_count_; ++k)
     if (!std::isfinite(out[k])) return padae::EvalStatus::outside_domain;
   return padae::EvalStatus::ok;
@@ -242,12 +243,12 @@ double Model::absolute_tolerance(int unknown, double) const {
 int Model::find_node(const std::string& name) const { return unknowns_.find_node(name); }
 
 const Device& Model::predicate_owner(int predicate) const {
-  return *devices_.at(predicate_owners_.at(predicate));
+  return *predicate_devices_.at(predicate_owners_.at(predicate)).device;
 }
 
 std::string Model::predicate_label(int predicate) const {
-  const Device& owner = predicate_owner(predicate);
-  return owner.predicate_label(predicate - owner.first_predicate());
+  const auto& [owner, first] = predicate_devices_.at(predicate_owners_.at(predicate));
+  return owner->predicate_label(predicate - first);
 }
 
 Vector Model::initial_conditions() const {

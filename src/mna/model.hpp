@@ -23,7 +23,7 @@ class Model final : public padae::System {
  public:
   // Throws ModelError for an unknown element type, a missing controlling element or a bad
   // parameter.
-  Model(const CircuitSpec& circuit, const RunSettings& settings);
+  Model(CircuitSpec circuit, const RunSettings& settings);
 
   int size() const override { return unknowns_.size(); }
   padae::UnknownKind kind(int unknown) const override { return kinds_[unknown]; }
@@ -44,6 +44,7 @@ class Model final : public padae::System {
   double resolution_step() const;
 
   void set_tolerances(const Tolerances& tolerances) { tolerances_ = tolerances; }
+  const CircuitSpec& circuit() const { return circuit_; }
   const Unknowns& unknowns() const { return unknowns_; }
   const std::vector<DevicePointer>& devices() const { return devices_; }
   // Node index or ground; -2 when the circuit has no such node.
@@ -76,18 +77,26 @@ class Model final : public padae::System {
  private:
   void hold_rows(const Vector& x, padae::Load& out) const;
 
+  // The circuit and the arena are declared before devices_: the devices read their cards and
+  // live in the arena.
+  CircuitSpec circuit_;
   Unknowns unknowns_;
-  DeviceArena device_memory_;  // before devices_: destroyed after them
+  DeviceArena device_memory_;
   std::vector<DevicePointer> devices_;
-  // The devices asked per step for guards and time events (switches and sources among
-  // 1e5 resistors and capacitors), and per Newton iteration for limits.
-  std::vector<const Device*> predicate_devices_;
+  // The devices asked per step for guards (with their first predicate) and time events
+  // (switches and sources among 1e5 resistors and capacitors), and per Newton iteration for
+  // limits.
+  struct PredicateOwner {
+    const Device* device;
+    int first_predicate;
+  };
+  std::vector<PredicateOwner> predicate_devices_;
   std::vector<const Device*> time_dependent_devices_;
   std::vector<const Device*> limiting_devices_;  // junctions
   padae::Pattern pattern_;
   std::vector<padae::UnknownKind> kinds_;
   std::vector<padae::JumpEntry> jump_entries_;
-  std::vector<int> predicate_owners_;  // device index of each predicate
+  std::vector<int> predicate_owners_;  // index in predicate_devices_ of each predicate
   int predicate_count_ = 0;
   Tolerances tolerances_;
   std::map<int, double> held_nodes_;

@@ -9,19 +9,19 @@
 namespace mna {
 namespace {
 
-class BehavioralSource final : public Device {
+class BehavioralSource final : public PredicateDevice {
  public:
   explicit BehavioralSource(const ElementSpec& spec)
-      : Device(spec.name), nodes_(spec.nodes), source_expression_(spec.expression), is_current_(spec.expression_is_current) {
+      : PredicateDevice(spec), is_current_(spec.expression_is_current) {
     require_nodes(spec, 2);
     if (!spec.expression) throw ModelError("B source '" + spec.name + "' needs V= or I=");
   }
   void allocate(Unknowns& u) override {
-    a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]);
+    a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]);
     if (!is_current_) branch_ = u.add("i(" + name() + ")", UnknownCategory::branch_current, name());
   }
   void declare(Stamper& s) override {
-    expression_ = std::make_unique<BehavioralExpression>(*source_expression_, s.unknowns(), name());
+    expression_ = std::make_unique<BehavioralExpression>(*card().expression, s.unknowns(), name());
     const auto& inputs = expression_->inputs();
     gradient_.resize(inputs.size());
     if (is_current_) {
@@ -59,8 +59,6 @@ class BehavioralSource final : public Device {
   void guards(double t, const Vector& x, double* out) const override { expression_->guards(t, x, out); }
 
  private:
-  std::vector<std::string> nodes_;
-  netlist::ExpressionPtr source_expression_;
   bool is_current_;
   std::unique_ptr<BehavioralExpression> expression_;
   mutable std::vector<double> gradient_;

@@ -7,12 +7,12 @@ namespace {
 class Capacitor final : public Device {
  public:
   explicit Capacitor(const ElementSpec& spec)
-      : Device(spec.name), nodes_(spec.nodes), capacitance_(spec.value), initial_voltage_(spec.initial_condition) {
+      : Device(spec), capacitance_(spec.value) {
     require_nodes(spec, 2);
     if (!std::isfinite(spec.value))
       throw ModelError("capacitor '" + spec.name + "': capacitance must be finite");
   }
-  void allocate(Unknowns& u) override { a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]); }
+  void allocate(Unknowns& u) override { a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]); }
   void declare(Stamper& s) override { s.charge_block(a_, b_, slots_); }
   void load(Evaluation& e) const override {
     const double q = capacitance_ * (e.value(a_) - e.value(b_));
@@ -26,15 +26,14 @@ class Capacitor final : public Device {
   }
   // IC= sets the voltage across: the non-ground node (or node a, relative to node b).
   void initial_condition(Vector& x0) const override {
-    if (!initial_voltage_) return;
-    if (a_ != ground) x0[a_] = value(x0, b_) + *initial_voltage_;
-    else if (b_ != ground) x0[b_] = -*initial_voltage_;
+    const std::optional<double>& initial_voltage = card().initial_condition;
+    if (!initial_voltage) return;
+    if (a_ != ground) x0[a_] = value(x0, b_) + *initial_voltage;
+    else if (b_ != ground) x0[b_] = -*initial_voltage;
   }
 
  private:
-  std::vector<std::string> nodes_;
   double capacitance_;
-  std::optional<double> initial_voltage_;
   int a_ = ground, b_ = ground;
   Stamper::Block slots_;
 };

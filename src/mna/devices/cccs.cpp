@@ -6,14 +6,13 @@ namespace {
 
 class Cccs final : public Device {
  public:
-  explicit Cccs(const ElementSpec& spec) : Device(spec.name), nodes_(spec.nodes), gain_(spec.value) {
+  explicit Cccs(const ElementSpec& spec) : Device(spec), gain_(spec.value) {
     require_nodes(spec, 2);
     if (spec.controls.size() != 1) throw ModelError("element '" + spec.name + "' needs one controlling source");
-    control_name_ = spec.controls[0];
   }
-  void allocate(Unknowns& u) override { a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]); }
+  void allocate(Unknowns& u) override { a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]); }
   void declare(Stamper& s) override {
-    control_ = s.unknowns().branch(control_name_);
+    control_ = s.unknowns().branch(card().controls[0]);
     s.entry(a_, control_, slot_a_), s.entry(b_, control_, slot_b_);
   }
   void load(Evaluation& e) const override {
@@ -24,9 +23,7 @@ class Cccs final : public Device {
   void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::current_defined, name()}); }
 
  private:
-  std::vector<std::string> nodes_;
   double gain_;
-  std::string control_name_;
   int a_ = ground, b_ = ground, control_ = ground, slot_a_ = -1, slot_b_ = -1;
 };
 

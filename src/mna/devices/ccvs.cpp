@@ -6,17 +6,16 @@ namespace {
 
 class Ccvs final : public Device {
  public:
-  explicit Ccvs(const ElementSpec& spec) : Device(spec.name), nodes_(spec.nodes), gain_(spec.value) {
+  explicit Ccvs(const ElementSpec& spec) : Device(spec), gain_(spec.value) {
     require_nodes(spec, 2);
     if (spec.controls.size() != 1) throw ModelError("element '" + spec.name + "' needs one controlling source");
-    control_name_ = spec.controls[0];
   }
   void allocate(Unknowns& u) override {
-    a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]);
+    a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]);
     branch_ = u.add("i(" + name() + ")", UnknownCategory::branch_current, name());
   }
   void declare(Stamper& s) override {
-    control_ = s.unknowns().branch(control_name_);
+    control_ = s.unknowns().branch(card().controls[0]);
     s.entry(a_, branch_, slot_a_branch_), s.entry(b_, branch_, slot_b_branch_);
     s.entry(branch_, a_, slot_branch_a_), s.entry(branch_, b_, slot_branch_b_);
     s.entry(branch_, control_, slot_branch_control_);
@@ -32,9 +31,7 @@ class Ccvs final : public Device {
   void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::voltage_defined, name()}); }
 
  private:
-  std::vector<std::string> nodes_;
   double gain_;
-  std::string control_name_;
   int a_ = ground, b_ = ground, branch_ = ground, control_ = ground;
   int slot_a_branch_ = -1, slot_b_branch_ = -1, slot_branch_a_ = -1, slot_branch_b_ = -1, slot_branch_control_ = -1;
 };

@@ -8,10 +8,10 @@ namespace {
 class CurrentSource final : public Device {
  public:
   CurrentSource(const ElementSpec& spec, const RunSettings& run)
-      : Device(spec.name), nodes_(spec.nodes), function_(spec.waveform, spec.value, run, spec.name) {
+      : Device(spec), function_(spec.waveform, spec.value, run, spec.name) {
     require_nodes(spec, 2);
   }
-  void allocate(Unknowns& u) override { a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]); }
+  void allocate(Unknowns& u) override { a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]); }
   void declare(Stamper&) override {}
   void load(Evaluation& e) const override {
     const double i = function_.value(e.t);
@@ -27,7 +27,6 @@ class CurrentSource final : public Device {
   double resolution_step() const override { return function_.resolution_step(); }
 
  private:
-  std::vector<std::string> nodes_;
   SourceFunction function_;
   int a_ = ground, b_ = ground;
 };

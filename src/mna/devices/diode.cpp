@@ -24,7 +24,7 @@ constexpr double largest_current = 1e3;  // amperes, before area: no diode here 
 
 class Diode final : public Device {
  public:
-  Diode(const ElementSpec& spec, const RunSettings& run) : Device(spec.name), nodes_(spec.nodes) {
+  Diode(const ElementSpec& spec, const RunSettings& run) : Device(spec) {
     require_nodes(spec, 2);
     const double area = spec.area, vt = boltzmann * nominal_temperature / charge;
     saturation_current_ = parameter(spec, "is", 1e-14) * area;
@@ -48,7 +48,7 @@ class Diode final : public Device {
   }
 
   void allocate(Unknowns& u) override {
-    anode_ = u.node(nodes_[0]), cathode_ = u.node(nodes_[1]);
+    anode_ = u.node(card().nodes[0]), cathode_ = u.node(card().nodes[1]);
     junction_ = anode_;
     if (series_resistance_ > 0)
       junction_ = u.add("v(" + name() + "#internal)", UnknownCategory::internal_node, name());
@@ -189,7 +189,6 @@ class Diode final : public Device {
     return knee;
   }
 
-  std::vector<std::string> nodes_;
   double saturation_current_, thermal_voltage_, breakdown_thermal_voltage_, series_resistance_, junction_capacitance_;
   double junction_potential_, grading_, depletion_fraction_, transit_time_;
   double exponent_limit_, critical_voltage_, critical_breakdown_voltage_;

@@ -11,17 +11,17 @@
 namespace mna {
 namespace {
 
-class IdealDiode final : public Device {
+class IdealDiode final : public PredicateDevice {
  public:
   explicit IdealDiode(const ElementSpec& spec)
-      : Device(spec.name), nodes_(spec.nodes), on_resistance_(parameter(spec, "ron", 0)),
+      : PredicateDevice(spec), on_resistance_(parameter(spec, "ron", 0)),
         off_resistance_(parameter(spec, "roff", infinity)), forward_voltage_(parameter(spec, "vfwd", 0)) {
     require_nodes(spec, 2);
     if (!(on_resistance_ >= 0) || !std::isfinite(on_resistance_) || !(off_resistance_ > on_resistance_))
       throw ModelError("diode '" + spec.name + "': need 0 <= RON < ROFF, RON finite");
   }
   void allocate(Unknowns& u) override {
-    a_ = u.node(nodes_[0]), k_ = u.node(nodes_[1]);
+    a_ = u.node(card().nodes[0]), k_ = u.node(card().nodes[1]);
     branch_ = u.add("i(" + name() + ")", UnknownCategory::branch_current, name());
     mode_ = u.add("mode(" + name() + ")", UnknownCategory::auxiliary, name());
   }
@@ -59,7 +59,6 @@ class IdealDiode final : public Device {
   }
 
  private:
-  std::vector<std::string> nodes_;
   double on_resistance_, off_resistance_, forward_voltage_;
   int a_ = ground, k_ = ground, branch_ = ground, mode_ = ground;
   int slot_a_branch_ = -1, slot_k_branch_ = -1, slot_branch_a_ = -1, slot_branch_k_ = -1, slot_branch_branch_ = -1;

@@ -3,14 +3,14 @@
 namespace mna {
 
 Inductor::Inductor(const ElementSpec& spec)
-    : Device(spec.name), nodes_(spec.nodes), inductance_(spec.value), initial_current_(spec.initial_condition) {
+    : Device(spec), inductance_(spec.value) {
   require_nodes(spec, 2);
   if (!(spec.value > 0) || !std::isfinite(spec.value))
     throw ModelError("inductor '" + spec.name + "': inductance must be positive and finite");
 }
 
 void Inductor::allocate(Unknowns& u) {
-  a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]);
+  a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]);
   branch_ = u.add("i(" + name() + ")", UnknownCategory::branch_current, name());
 }
 
@@ -36,7 +36,7 @@ void Inductor::edges(std::vector<Edge>& out) const { out.push_back({a_, b_, Conn
 double Inductor::stored_energy(const Vector& x) const { return 0.5 * inductance_ * x[branch_] * x[branch_]; }
 
 void Inductor::initial_condition(Vector& x0) const {
-  if (initial_current_) x0[branch_] = *initial_current_;
+  if (card().initial_condition) x0[branch_] = *card().initial_condition;
 }
 
 namespace {

@@ -21,9 +21,7 @@ class Inductor final : public Device {
   int branch() const { return branch_; }
 
  private:
-  std::vector<std::string> nodes_;
   double inductance_;
-  std::optional<double> initial_current_;
   int a_ = ground, b_ = ground, branch_ = ground;
   int slot_a_branch_ = -1, slot_b_branch_ = -1, slot_branch_a_ = -1, slot_branch_b_ = -1;
   int slot_flux_ = -1;

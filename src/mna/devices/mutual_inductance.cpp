@@ -8,13 +8,13 @@ namespace {
 
 class MutualInductance final : public Device {
  public:
-  explicit MutualInductance(const ElementSpec& spec) : Device(spec.name), coupling_(spec.value), inductors_(spec.controls) {
-    if (inductors_.size() != 2) throw ModelError("coupling '" + spec.name + "' needs two inductors");
+  explicit MutualInductance(const ElementSpec& spec) : Device(spec), coupling_(spec.value) {
+    if (spec.controls.size() != 2) throw ModelError("coupling '" + spec.name + "' needs two inductors");
     if (!(std::abs(coupling_) <= 1)) throw ModelError("coupling '" + spec.name + "': |k| must not exceed 1");
   }
   void declare(Stamper& s) override {
-    const Inductor* l1 = inductor(s, inductors_[0]);
-    const Inductor* l2 = inductor(s, inductors_[1]);
+    const Inductor* l1 = inductor(s, card().controls[0]);
+    const Inductor* l2 = inductor(s, card().controls[1]);
     mutual_ = coupling_ * std::sqrt(l1->inductance() * l2->inductance());
     branch1_ = l1->branch(), branch2_ = l2->branch();
     s.charge_entry(branch1_, branch2_, slot12_), s.charge_entry(branch2_, branch1_, slot21_);
@@ -33,7 +33,6 @@ class MutualInductance final : public Device {
     return found;
   }
   double coupling_;
-  std::vector<std::string> inductors_;
   double mutual_ = 0;
   int branch1_ = ground, branch2_ = ground, slot12_ = -1, slot21_ = -1;
 };

@@ -6,12 +6,12 @@ namespace {
 
 class Resistor final : public Device {
  public:
-  explicit Resistor(const ElementSpec& spec) : Device(spec.name), nodes_(spec.nodes), conductance_(1 / spec.value) {
+  explicit Resistor(const ElementSpec& spec) : Device(spec), conductance_(1 / spec.value) {
     require_nodes(spec, 2);
     if (!(spec.value != 0) || !std::isfinite(spec.value))
       throw ModelError("resistor '" + spec.name + "': resistance must be finite and non-zero");
   }
-  void allocate(Unknowns& u) override { a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]); }
+  void allocate(Unknowns& u) override { a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]); }
   void declare(Stamper& s) override { s.block(a_, b_, slots_); }
   void load(Evaluation& e) const override {
     const double i = conductance_ * (e.value(a_) - e.value(b_));
@@ -21,7 +21,6 @@ class Resistor final : public Device {
   void edges(std::vector<Edge>& out) const override { out.push_back({a_, b_, Connection::conductive, name()}); }
 
  private:
-  std::vector<std::string> nodes_;
   double conductance_;
   int a_ = ground, b_ = ground;
   Stamper::Block slots_;

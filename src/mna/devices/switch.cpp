@@ -13,10 +13,10 @@
 namespace mna {
 namespace {
 
-class Switch final : public Device {
+class Switch final : public PredicateDevice {
  public:
   Switch(const ElementSpec& spec, bool current_controlled)
-      : Device(spec.name), nodes_(spec.nodes), current_controlled_(current_controlled),
+      : PredicateDevice(spec), current_controlled_(current_controlled),
         threshold_(parameter(spec, current_controlled ? "it" : "vt", 0)),
         hysteresis_(parameter(spec, current_controlled ? "ih" : "vh", 0)),
         on_resistance_(parameter(spec, "ron", parameter(spec, "ideal", 0) != 0 ? 0 : 1)),
@@ -25,7 +25,6 @@ class Switch final : public Device {
     require_nodes(spec, current_controlled ? 2 : 4);
     if (current_controlled) {
       if (spec.controls.size() != 1) throw ModelError("switch '" + spec.name + "' needs one controlling source");
-      control_name_ = spec.controls[0];
     }
     if (hysteresis_ < 0) throw ModelError("switch '" + spec.name + "': negative hysteresis is not supported");
     if (!(on_resistance_ >= 0) || !(off_resistance_ > on_resistance_) || !std::isfinite(on_resistance_))
@@ -34,13 +33,13 @@ class Switch final : public Device {
   }
 
   void allocate(Unknowns& u) override {
-    a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]);
-    if (!current_controlled_) c_ = u.node(nodes_[2]), d_ = u.node(nodes_[3]);
+    a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]);
+    if (!current_controlled_) c_ = u.node(card().nodes[2]), d_ = u.node(card().nodes[3]);
     if (ideal_) branch_ = u.add("i(" + name() + ")", UnknownCategory::branch_current, name());
     state_ = u.add("state(" + name() + ")", UnknownCategory::auxiliary, name());
   }
   void declare(Stamper& s) override {
-    if (current_controlled_) c_ = s.unknowns().branch(control_name_);
+    if (current_controlled_) c_ = s.unknowns().branch(card().controls[0]);
     if (!ideal_) {
       s.block(a_, b_, slots_);
       return;
@@ -88,12 +87,10 @@ class Switch final : public Device {
   void initial_auxiliaries(Vector& x0) const override { x0[state_] = initially_on_ ? 1 : 0; }
 
  private:
-  std::vector<std::string> nodes_;
   bool current_controlled_;
   double threshold_, hysteresis_, on_resistance_, off_resistance_;
   bool initially_on_;
   bool ideal_ = false;
-  std::string control_name_;
   int a_ = ground, b_ = ground, c_ = ground, d_ = ground, branch_ = ground, state_ = ground;
   Stamper::Block slots_;
   int slot_a_branch_ = -1, slot_b_branch_ = -1, slot_branch_a_ = -1, slot_branch_b_ = -1, slot_branch_branch_ = -1;

@@ -6,11 +6,11 @@ namespace {
 
 class Vccs final : public Device {
  public:
-  explicit Vccs(const ElementSpec& spec) : Device(spec.name), nodes_(spec.nodes), gain_(spec.value) {
+  explicit Vccs(const ElementSpec& spec) : Device(spec), gain_(spec.value) {
     require_nodes(spec, 4);
   }
   void allocate(Unknowns& u) override {
-    for (int k = 0; k < 4; ++k) n_[k] = u.node(nodes_[k]);
+    for (int k = 0; k < 4; ++k) n_[k] = u.node(card().nodes[k]);
   }
   void declare(Stamper& s) override {
     s.entry(n_[0], n_[2], slots_[0]), s.entry(n_[0], n_[3], slots_[1]);
@@ -26,7 +26,6 @@ class Vccs final : public Device {
   }
 
  private:
-  std::vector<std::string> nodes_;
   double gain_;
   int n_[4] = {ground, ground, ground, ground};
   int slots_[4] = {-1, -1, -1, -1};

@@ -6,11 +6,11 @@ namespace {
 
 class Vcvs final : public Device {
  public:
-  explicit Vcvs(const ElementSpec& spec) : Device(spec.name), nodes_(spec.nodes), gain_(spec.value) {
+  explicit Vcvs(const ElementSpec& spec) : Device(spec), gain_(spec.value) {
     require_nodes(spec, 4);
   }
   void allocate(Unknowns& u) override {
-    for (int k = 0; k < 4; ++k) n_[k] = u.node(nodes_[k]);
+    for (int k = 0; k < 4; ++k) n_[k] = u.node(card().nodes[k]);
     branch_ = u.add("i(" + name() + ")", UnknownCategory::branch_current, name());
   }
   void declare(Stamper& s) override {
@@ -30,7 +30,6 @@ class Vcvs final : public Device {
   }
 
  private:
-  std::vector<std::string> nodes_;
   double gain_;
   int n_[4] = {ground, ground, ground, ground};
   int branch_ = ground;

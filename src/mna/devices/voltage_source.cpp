@@ -8,11 +8,11 @@ namespace {
 class VoltageSource final : public Device {
  public:
   VoltageSource(const ElementSpec& spec, const RunSettings& run)
-      : Device(spec.name), nodes_(spec.nodes), function_(spec.waveform, spec.value, run, spec.name) {
+      : Device(spec), function_(spec.waveform, spec.value, run, spec.name) {
     require_nodes(spec, 2);
   }
   void allocate(Unknowns& u) override {
-    a_ = u.node(nodes_[0]), b_ = u.node(nodes_[1]);
+    a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]);
     branch_ = u.add("i(" + name() + ")", UnknownCategory::branch_current, name());
   }
   void declare(Stamper& s) override {
@@ -38,7 +38,6 @@ class VoltageSource final : public Device {
   }
 
  private:
-  std::vector<std::string> nodes_;
   SourceFunction function_;
   int a_ = ground, b_ = ground, branch_ = ground;
   int slot_a_branch_ = -1, slot_b_branch_ = -1, slot_branch_a_ = -1, slot_branch_b_ = -1;

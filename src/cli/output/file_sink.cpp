@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include <fcntl.h>
+#include <time.h>
 #include <unistd.h>
 
 namespace padsim::output::detail {
@@ -14,6 +15,14 @@ constexpr std::size_t flush_bytes = 1 << 16;                 // 64 KiB
 // A record committed 0.1 s or more after the previous flush is written at once: rows that come
 // slowly reach the file one by one, fast ones in 64 KiB blocks at least ten times a second.
 constexpr auto flush_interval = std::chrono::milliseconds(100);
+
+// The monotonic clock at its tick (a few ms, far below the flush interval): it is read once per
+// record, and the precise clock took 3 % of writing buck_1000 on the TSTEP grid (200,000 rows).
+std::chrono::nanoseconds coarse_now() {
+  timespec now{};
+  ::clock_gettime(CLOCK_MONOTONIC_COARSE, &now);
+  return std::chrono::seconds(now.tv_sec) + std::chrono::nanoseconds(now.tv_nsec);
+}
 }  // namespace
 
 FileSink::FileSink(const std::string& path) : path_(path) {
@@ -24,7 +33,7 @@ FileSink::FileSink(const std::string& path) : path_(path) {
     if (fd_ < 0) fail("cannot open");
     owns_fd_ = true;
   }
-  last_flush_ = std::chrono::steady_clock::now();
+  last_flush_ = coarse_now();
 }
 
 FileSink::~FileSink() {
@@ -44,7 +53,7 @@ bool FileSink::commit() {
     flush();
     return true;
   }
-  if (std::chrono::steady_clock::now() - last_flush_ >= flush_interval) {  // ~20 ns per row
+  if (coarse_now() - last_flush_ >= flush_interval) {
     flush();
     return true;
   }
@@ -70,7 +79,7 @@ void FileSink::flush() {
     written_ += n;
   }
   buffer_.clear();
-  last_flush_ = std::chrono::steady_clock::now();
+  last_flush_ = coarse_now();
 }
 
 void FileSink::pwrite_at(std::int64_t offset, std::string_view bytes) {

@@ -39,7 +39,7 @@ class FileSink {
   bool failed_ = false;
   std::int64_t written_ = 0;
   fmt::memory_buffer buffer_;
-  std::chrono::steady_clock::time_point last_flush_;
+  std::chrono::nanoseconds last_flush_{};  // on the coarse monotonic clock (file_sink.cpp)
 };
 
 }  // namespace padsim::output::detail

@@ -19,6 +19,8 @@ if(KLU_FOUND AND NOT TARGET KLU::KLU)
     get_filename_component(directory "${${library}}" DIRECTORY)
     list(APPEND KLU_LIBRARY_DIRS "${directory}")
   endforeach()
+  unset(library)
+  unset(directory)
   list(REMOVE_DUPLICATES KLU_LIBRARY_DIRS)
   set_target_properties(KLU::KLU PROPERTIES
     INTERFACE_INCLUDE_DIRECTORIES "${KLU_INCLUDE_DIR}"

@@ -23,9 +23,8 @@ class Switch final : public PredicateDevice {
         off_resistance_(parameter(spec, "roff", parameter(spec, "ideal", 0) != 0 ? infinity : 1e12)),
         initially_on_(spec.initially_on.value_or(false)) {
     require_nodes(spec, current_controlled ? 2 : 4);
-    if (current_controlled) {
-      if (spec.controls.size() != 1) throw ModelError("switch '" + spec.name + "' needs one controlling source");
-    }
+    if (current_controlled && spec.controls.size() != 1)
+      throw ModelError("switch '" + spec.name + "' needs one controlling source");
     if (hysteresis_ < 0) throw ModelError("switch '" + spec.name + "': negative hysteresis is not supported");
     if (!(on_resistance_ >= 0) || !(off_resistance_ > on_resistance_) || !std::isfinite(on_resistance_))
       throw ModelError("switch '" + spec.name + "': need 0 <= RON < ROFF, RON finite");

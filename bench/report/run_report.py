@@ -1281,7 +1281,8 @@ def main(argv=None):
         meta = {"date": datetime.datetime.now().strftime("%Y-%m-%d %H:%M"), "seconds": time.monotonic() - started,
                 "commit": git("rev-parse", "--short", "HEAD") or "?",
                 "dirty": " with uncommitted changes in %s" % ", ".join(sorted(set(
-                    l[3:].split("/")[1] for l in dirty.splitlines() if l[3:].startswith("src/")))) if dirty else "",
+                    path.split("/")[1] for path in (l.split(None, 1)[-1] for l in dirty.splitlines())
+                    if path.startswith("src/")))) if dirty else "",
                 "machine": machine(), "load": [load_at_start, os.getloadavg()[0]], "sections": sections}
     else:
         meta = results["meta"]  # --sections none: the document again from the cached results

@@ -453,6 +453,10 @@ struct Problem {
   std::function<double(const Run&)> error;
   std::function<double(const Run&)> event_error;
   std::function<int()> expected_events;
+  // The tightest rtol of the sweep. The event-time target (1e-12 of the exact instant) needs
+  // the integration's own error below it, so problems with events go down to 1e-15; TRANSAMP
+  // stops at 1e-13, below which both solvers' steps fall to round-off.
+  double tightest_rtol = 1e-13;
 };
 
 double rel(double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-300); }
@@ -488,6 +492,7 @@ std::vector<Problem> problems() {
     };
     p.event_error = event_error;
     p.expected_events = [] { return 2; };
+    p.tightest_rtol = 1e-15;
     list.push_back(p);
     p.name = "masses_momentum";
     p.description = "paper (4): the same motion with the momentum as unknown, no jumps";
@@ -551,6 +556,7 @@ std::vector<Problem> problems() {
       return worst;
     };
     p.expected_events = [] { return static_cast<int>(times.size()); };
+    p.tightest_rtol = 1e-15;
     list.push_back(p);
   }
   {
@@ -588,6 +594,7 @@ std::vector<Problem> problems() {
       return worst;
     };
     p.expected_events = [] { return static_cast<int>(times.size()); };
+    p.tightest_rtol = 1e-15;
     list.push_back(p);
   }
   {
@@ -626,7 +633,7 @@ int main(int argc, char** argv) {
   // padae_ida_compare [min CPU seconds per configuration] [problem name]
   const double budget = argc > 1 ? std::atof(argv[1]) : 0.2;
   const std::string only = argc > 2 ? argv[2] : "";
-  const std::vector<double> tolerances = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13};
+  const std::vector<double> tolerances = {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14, 1e-15};
   std::printf("{\"sundials\": \"%s\", \"problems\": [\n", SUNDIALS_VERSION);
   bool first_problem = true;
   for (const Problem& problem : problems()) {
@@ -640,6 +647,7 @@ int main(int argc, char** argv) {
     bool first_run = true;
     for (const char* solver : {"padae", "ida"}) {
       for (double rtol : tolerances) {
+        if (rtol < problem.tightest_rtol) continue;
         auto once = [&] {
           auto model = problem.make();
           return std::string(solver) == "padae"

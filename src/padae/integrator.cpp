@@ -423,7 +423,12 @@ void Integrator::Impl::predict() {
 // the matrix reused across steps (IDA's), or damped Newton refactored at every iterate (mode
 // full).
 NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
-  x_new = x_predicted;
+  // Newton starts at the predictor, or short of it where the model limits the move from the
+  // step's start: an extrapolated junction voltage far into forward bias would be crept back
+  // one n VT per iteration. The error test still measures from the predictor itself.
+  const double fraction = newton.step_fraction(x, x_predicted);
+  if (fraction < 1) x_new = x + fraction * (x_predicted - x);
+  else x_new = x_predicted;
   const CorrectorEquation equation{t_new, cj, q_predicted, q_derivative_predicted, x_predicted, p};
   if (mode == Newton::full) {
     const NewtonOutcome outcome = solve_damped(newton, statistics, equation, inverse_weight_x, kNewtonTolerance,

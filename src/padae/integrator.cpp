@@ -281,6 +281,7 @@ struct Integrator::Impl {
 
   Vector inverse_weight_x, inverse_weight_q, charge_weight;
   Vector x_predicted, q_predicted, q_derivative_predicted, x_new, q_new, delta, residual;
+  double newton_start_fraction = 1;  // how far toward x_predicted Newton starts (predict())
   Vector correction_x, correction_q;
 };
 
@@ -417,17 +418,17 @@ void Integrator::Impl::predict() {
   }
   // The corrector's q' = q'_pred + cj (q - q_pred) is then the trapezoidal one.
   if (trapezoidal_step()) q_derivative_predicted = cj * (q_predicted - phi_q[0]) - q_derivative;
-}
-
-// Newton on  qdot_pred + cj (q(x) - q_pred) + f(t, x) = 0, from x_pred: modified Newton with
-// the matrix reused across steps (IDA's), or damped Newton refactored at every iterate (mode
-// full).
-NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
   // Newton starts at the predictor, or short of it where the model limits the move from the
   // step's start: an extrapolated junction voltage far into forward bias would be crept back
   // one n VT per iteration. The error test still measures from the predictor itself.
-  const double fraction = newton.step_fraction(x, x_predicted);
-  if (fraction < 1) x_new = x + fraction * (x_predicted - x);
+  newton_start_fraction = newton.step_fraction(x, x_predicted);
+}
+
+// Newton on  qdot_pred + cj (q(x) - q_pred) + f(t, x) = 0, from x_pred or short of it
+// (predict()): modified Newton with the matrix reused across steps (IDA's), or damped Newton
+// refactored at every iterate (mode full).
+NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
+  if (newton_start_fraction < 1) x_new = x + newton_start_fraction * (x_predicted - x);
   else x_new = x_predicted;
   const CorrectorEquation equation{t_new, cj, q_predicted, q_derivative_predicted, x_predicted, p};
   if (mode == Newton::full) {

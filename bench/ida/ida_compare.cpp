@@ -24,15 +24,8 @@
 // Usage: padae_ida_compare [min CPU seconds per configuration, default 0.2] [problem name]
 // With IDA_COMPARE_EVENTS set, every event of every run is listed on stderr.
 //
-// IDA's linear solver is its dense one (these systems have 2 to 8 unknowns; padae uses KLU).
-// The charge matrix dq/dx is constant in all these problems, so IDA's residual is
-// F(t, y, y') = (dq/dx) y' + f(t, y); auxiliary unknowns get y' = 0.
-#include <ida/ida.h>
-#include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
-
+// IDA runs through ida_run.hpp: its dense linear solver (these systems have 2 to 8 unknowns;
+// padae uses KLU), the charge matrix dq/dx constant in all these problems.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -45,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "ida_run.hpp"
 #include "padae/integrator.hpp"
 #include "padae/semi_explicit.hpp"
 #include "paper_impacts.hpp"
@@ -156,289 +150,54 @@ Run run_padae(padae::System& model, const Vector& x0, double t0, double t_end, d
 }
 
 // --- IDA ----------------------------------------------------------------------------------------
-struct IdaModel {
-  padae::System& model;
-  int n;
-  Eigen::MatrixXd charge;  // dq/dx, constant
-  Predicates p;
-  padae::Load load;
-  Vector x;
-  bool analytic;
-};
-
-void load_at(IdaModel& m, N_Vector y, bool jacobian) {
-  const double* yd = N_VGetArrayPointer(y);
-  for (int i = 0; i < m.n; ++i) m.x[i] = yd[i];
-  m.load.f.setZero(m.n);
-  m.load.q.setZero(m.n);
-  m.load.jacobian_requested = jacobian;
-  if (jacobian) {
-    std::fill(m.load.df_dx.begin(), m.load.df_dx.end(), 0.0);
-    std::fill(m.load.dq_dx.begin(), m.load.dq_dx.end(), 0.0);
-  }
-}
-
-int ida_residual(double t, N_Vector y, N_Vector yp, N_Vector r, void* user) {
-  auto& m = *static_cast<IdaModel*>(user);
-  load_at(m, y, false);
-  if (m.model.load(t, m.x, m.p, m.load) != EvalStatus::ok) return 1;  // recoverable: IDA cuts the step
-  const double* ypd = N_VGetArrayPointer(yp);
-  double* rd = N_VGetArrayPointer(r);
-  for (int i = 0; i < m.n; ++i) {
-    if (m.model.kind(i) == X) {
-      rd[i] = ypd[i];
-      continue;
-    }
-    double s = m.load.f[i];
-    for (int j = 0; j < m.n; ++j) s += m.charge(i, j) * ypd[j];
-    rd[i] = s;
-  }
-  return 0;
-}
-
-int ida_jacobian(double t, double cj, N_Vector y, N_Vector, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector) {
-  auto& m = *static_cast<IdaModel*>(user);
-  load_at(m, y, true);
-  if (m.model.load(t, m.x, m.p, m.load) != EvalStatus::ok) return 1;
-  SUNMatZero(J);
-  const auto& starts = m.model.pattern().column_starts();
-  const auto& rows = m.model.pattern().row_indices();
-  for (int column = 0; column < m.n; ++column)
-    for (int k = starts[column]; k < starts[column + 1]; ++k)
-      if (m.model.kind(rows[k]) != X) SM_ELEMENT_D(J, rows[k], column) += m.load.df_dx[k];
-  for (int i = 0; i < m.n; ++i) {
-    if (m.model.kind(i) == X) {
-      SM_ELEMENT_D(J, i, i) = cj;
-      continue;
-    }
-    for (int j = 0; j < m.n; ++j) SM_ELEMENT_D(J, i, j) += cj * m.charge(i, j);
-  }
-  return 0;
-}
-
-int ida_roots(double t, N_Vector y, N_Vector, double* g, void* user) {
-  auto& m = *static_cast<IdaModel*>(user);
-  const double* yd = N_VGetArrayPointer(y);
-  for (int i = 0; i < m.n; ++i) m.x[i] = yd[i];
-  Vector out(m.model.predicate_count());
-  if (m.model.guards(t, m.x, out) != EvalStatus::ok) return 1;
-  for (int k = 0; k < out.size(); ++k) g[k] = out[k];
-  return 0;
-}
-
-// y'(t0) consistent with an index-1 charge-form DAE with constant Q = dq/dx: Q y' = -f on the
-// range of Q, and the hidden constraints n^T f(t, y) = 0 (n in the left null space of Q)
-// differentiated: n^T (df/dx y' + df/dt) = 0. Least squares on the stacked (consistent) system.
-Vector consistent_rate(IdaModel& m, double t, const Vector& x) {
-  const int n = m.n;
-  auto f_at = [&](double tt) {
-    padae::Load load;
-    load.f.setZero(n);
-    load.q.setZero(n);
-    m.model.load(tt, x, m.p, load);
-    return Vector(load.f);
-  };
-  Vector f = f_at(t);
-  const double dt = 1e-7;
-  Vector dfdt = (f_at(t + dt) - f_at(t - dt)) / (2 * dt);
-  padae::Load load;
-  load.f.setZero(n);
-  load.q.setZero(n);
-  load.df_dx.assign(static_cast<std::size_t>(m.model.pattern().nonzeros()), 0.0);
-  load.dq_dx.assign(load.df_dx.size(), 0.0);
-  load.jacobian_requested = true;
-  m.model.load(t, x, m.p, load);
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
-  const auto& starts = m.model.pattern().column_starts();
-  const auto& rows = m.model.pattern().row_indices();
-  for (int column = 0; column < n; ++column)
-    for (int k = starts[column]; k < starts[column + 1]; ++k) J(rows[k], column) = load.df_dx[k];
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(m.charge.transpose());
-  Eigen::MatrixXd null = lu.kernel();  // columns: left null vectors of Q
-  if (lu.rank() == n) null.resize(n, 0);
-  Eigen::MatrixXd S(n + null.cols(), n);
-  Vector rhs(n + null.cols());
-  S.topRows(n) = m.charge;
-  rhs.head(n) = -f;
-  if (null.cols() > 0) {
-    S.bottomRows(null.cols()) = null.transpose() * J;
-    rhs.tail(null.cols()) = -null.transpose() * dfdt;
-  }
-  return S.colPivHouseholderQr().solve(rhs);
-}
-
 Run run_ida(padae::System& model, const Vector& x0, double t0, double t_end, double rtol, bool semi_explicit) {
   Run run;
   const int n = model.size();
-  IdaModel m{model, n, Eigen::MatrixXd::Zero(n, n), Predicates(static_cast<std::size_t>(model.predicate_count()), 0),
-             padae::Load{}, Vector::Zero(n), model.analytic_jacobian()};
-  m.load.df_dx.assign(static_cast<std::size_t>(model.pattern().nonzeros()), 0.0);
-  m.load.dq_dx.assign(m.load.df_dx.size(), 0.0);
-  // The charge matrix: semi-explicit systems have q_i = x_i on differential rows; others say
-  // it through dq/dx (constant here).
-  if (semi_explicit) {
-    for (int i = 0; i < n; ++i)
-      if (model.kind(i) == D) m.charge(i, i) = 1;
-  } else {
-    padae::Load load;
-    load.f.setZero(n);
-    load.q.setZero(n);
-    load.df_dx.assign(m.load.df_dx.size(), 0.0);
-    load.dq_dx.assign(m.load.df_dx.size(), 0.0);
-    load.jacobian_requested = true;
-    model.load(t0, x0, m.p, load);
-    const auto& starts = model.pattern().column_starts();
-    const auto& rows = model.pattern().row_indices();
-    for (int column = 0; column < n; ++column)
-      for (int k = starts[column]; k < starts[column + 1]; ++k) m.charge(rows[k], column) = load.dq_dx[k];
-  }
   // Initial predicates from the guards (as padae::Integrator::initialize without p0).
   const int K = model.predicate_count();
+  Predicates p0(static_cast<std::size_t>(K), 0);
   if (K > 0) {
     Vector g(K);
     model.guards(t0, x0, g);
-    for (int k = 0; k < K; ++k) m.p[static_cast<std::size_t>(k)] = g[k] > 0;
+    for (int k = 0; k < K; ++k) p0[static_cast<std::size_t>(k)] = g[k] > 0;
   }
-
-  SUNContext context;
-  SUNContext_Create(nullptr, &context);
-  N_Vector y = N_VNew_Serial(n, context), yp = N_VNew_Serial(n, context), id = N_VNew_Serial(n, context);
-  for (int i = 0; i < n; ++i) {
-    NV_Ith_S(y, i) = x0[i];
-    NV_Ith_S(yp, i) = 0;
-    NV_Ith_S(id, i) = model.kind(i) == A ? 0.0 : 1.0;
-  }
-  if (!semi_explicit) {
-    const Vector rate = consistent_rate(m, t0, x0);
-    for (int i = 0; i < n; ++i) NV_Ith_S(yp, i) = rate[i];
-  }
-  void* ida = IDACreate(context);
-  SUNMatrix J = SUNDenseMatrix(n, n, context);
-  SUNLinearSolver LS = SUNLinSol_Dense(y, J, context);
-  auto fail = [&](const std::string& why) {
-    run.ok = false;
-    run.failure = why;
-  };
-  IDAInit(ida, ida_residual, t0, y, yp);
-  IDASStolerances(ida, rtol, rtol);
-  IDASetUserData(ida, &m);
-  IDASetLinearSolver(ida, LS, J);
-  if (m.analytic) IDASetJacFn(ida, ida_jacobian);
+  ida_bench::IdaSettings settings;
+  settings.rtol = rtol;
+  settings.atol = Vector::Constant(n, rtol);
+  settings.semi_explicit = semi_explicit;
+  settings.max_steps = kMaxIdaSteps;
   // Algebraic unknowns (semi-explicit problems) are left out of the error test, as padae
   // tests the dynamic rows only. TRANSAMP has no purely algebraic unknown (its algebraic
   // equations mix node voltages that also carry charges), so IDA tests all eight there.
-  IDASetId(ida, id);
-  IDASetSuppressAlg(ida, SUNTRUE);
-  IDASetMaxNumSteps(ida, kMaxIdaSteps);
-  IDASetStopTime(ida, t_end);
-  if (K > 0) {
-    IDARootInit(ida, K, ida_roots);
-    IDASetNoInactiveRootWarn(ida);
-  }
-  // IDAReInit resets IDA's counters: they are added up before each restart.
-  auto add_counters = [&] {
-    long steps = 0, iterations = 0, jacobians = 0, setups = 0, error_fails = 0, newton_fails = 0, residuals = 0;
-    IDAGetNumSteps(ida, &steps);
-    IDAGetNumNonlinSolvIters(ida, &iterations);
-    IDAGetNumJacEvals(ida, &jacobians);
-    IDAGetNumLinSolvSetups(ida, &setups);
-    IDAGetNumErrTestFails(ida, &error_fails);
-    IDAGetNumNonlinSolvConvFails(ida, &newton_fails);
-    IDAGetNumResEvals(ida, &residuals);
-    run.steps += steps;
-    run.newton += iterations;
-    run.jacobians += jacobians;
-    run.factorizations += setups;
-    run.rejected += error_fails + newton_fails;
-    run.residuals += residuals;
-  };
-  const double span = t_end - t0;
-  if (semi_explicit && IDACalcIC(ida, IDA_YA_YDP_INIT, t0 + 1e-3 * span) != IDA_SUCCESS) fail("IDACalcIC at t0");
-  if (semi_explicit && run.ok) IDAGetConsistentIC(ida, y, yp);
-  std::vector<int> roots(static_cast<std::size_t>(std::max(K, 1)));
-  Vector g(K), g_ahead(K);
-  double t = t0;
-  while (run.ok && t < t_end) {
-    const int flag = IDASolve(ida, t_end, &t, y, yp, IDA_NORMAL);
-    if (flag == IDA_TSTOP_RETURN || (flag == IDA_SUCCESS && t >= t_end)) break;
-    if (flag != IDA_ROOT_RETURN) {
-      fail("IDASolve returned " + std::to_string(flag) + " at t = " + std::to_string(t));
-      break;
-    }
-    IDAGetRootInfo(ida, roots.data());
-    // A predicate flips in the direction its guard was heading (convention (9)); a guard that
-    // returns to the side its predicate already says is no event.
-    Vector e = Vector::Zero(K);
-    int first = -1;
-    for (int k = 0; k < K; ++k) {
-      const int r = roots[static_cast<std::size_t>(k)];
-      if (r != 0 && static_cast<bool>(m.p[static_cast<std::size_t>(k)]) != (r > 0)) {
-        e[k] = r > 0 ? 1 : -1;
-        if (first < 0) first = k;
-      }
-    }
-    if (first < 0) continue;
+  settings.suppress_algebraic = true;
+  ida_bench::IdaRun ida(model, t0, x0, p0, t_end - t0, settings);
+  while (ida.ok() && ida.t() < t_end) {
+    const ida_bench::Outcome outcome = ida.advance(t_end, t_end);
+    if (outcome != ida_bench::Outcome::root) break;
     Event event;
-    event.t = t;
-    event.x_before.resize(n);
-    Vector xdot(n), x(n);
-    for (int i = 0; i < n; ++i) {
-      event.x_before[i] = NV_Ith_S(y, i);
-      xdot[i] = NV_Ith_S(yp, i);
-    }
+    event.t = ida.t();
+    event.x_before = ida.y();
+    const Vector xdot = ida.yp();
+    int first = -1;
+    if (!ida.event(first)) continue;
     if (semi_explicit)
-      run.location_error = std::max(run.location_error, location_error(model, t, event.x_before, xdot, first));
-    add_counters();
-    // Jump x += X(t, x-, p-) e, flip, restart (IDAReInit + IDACalcIC), then the fixed point:
-    // a guard with a definite sign against its predicate flips; a guard at zero (the one just
-    // crossed, or one a jump left there) takes the side the new motion heads to, dg/dt along
-    // the consistent y' (convention (9): an impact reverses the motion, the rod leaves the wall).
-    int iteration = 0;
-    for (; iteration < 50 && e.cwiseAbs().sum() > 0 && run.ok; ++iteration) {
-      for (int i = 0; i < n; ++i) x[i] = NV_Ith_S(y, i);
-      if (model.has_jumps()) {
-        std::vector<padae::JumpEntry> entries;
-        model.jump_matrix(t, x, m.p, entries);
-        for (const auto& j : entries) x[j.row] += j.value * e[j.predicate];
-      }
-      for (int k = 0; k < K; ++k)
-        if (e[k] != 0) m.p[static_cast<std::size_t>(k)] = e[k] > 0;
-      for (int i = 0; i < n; ++i) NV_Ith_S(y, i) = x[i];
-      IDAReInit(ida, t, y, yp);
-      if (IDACalcIC(ida, IDA_YA_YDP_INIT, std::min(t_end, t + 1e-3 * span)) != IDA_SUCCESS) {
-        fail("IDACalcIC after the event at t = " + std::to_string(t));
-        break;
-      }
-      IDAGetConsistentIC(ida, y, yp);
-      for (int i = 0; i < n; ++i) {
-        x[i] = NV_Ith_S(y, i);
-        xdot[i] = NV_Ith_S(yp, i);
-      }
-      const double dt = 1e-7 * std::max(std::abs(t), 1e-3);
-      model.guards(t, x, g);
-      model.guards(t + dt, x + dt * xdot, g_ahead);
-      e.setZero();
-      for (int k = 0; k < K; ++k) {
-        const double tiny = 1e-9 * (1 + x.cwiseAbs().maxCoeff());
-        const bool want = std::abs(g[k]) > tiny ? g[k] > 0 : g_ahead[k] > g[k];
-        if (want != static_cast<bool>(m.p[static_cast<std::size_t>(k)])) e[k] = want ? 1 : -1;
-      }
-    }
-    if (iteration == 50) fail("no predicate fixed point at t = " + std::to_string(t));
-    event.x_after = x;
+      run.location_error = std::max(run.location_error, location_error(model, event.t, event.x_before, xdot, first));
+    event.x_after = ida.y();
     run.events.push_back(event);
   }
-  add_counters();
-  run.x_end.resize(n);
-  for (int i = 0; i < n; ++i) run.x_end[i] = NV_Ith_S(y, i);
-  run.t_end = t;
-  IDAFree(&ida);
-  SUNLinSolFree(LS);
-  SUNMatDestroy(J);
-  N_VDestroy(y);
-  N_VDestroy(yp);
-  N_VDestroy(id);
-  SUNContext_Free(&context);
+  if (!ida.ok()) {
+    run.ok = false;
+    run.failure = ida.failure();
+  }
+  const ida_bench::Counters c = ida.counters();
+  run.steps = c.steps;
+  run.rejected = c.rejected;
+  run.newton = c.newton;
+  run.jacobians = c.jacobians;
+  run.factorizations = c.factorizations;
+  run.residuals = c.residuals;
+  run.x_end = ida.y();
+  run.t_end = ida.t();
   return run;
 }
 

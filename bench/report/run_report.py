@@ -45,6 +45,8 @@ import spicecmp as sc  # noqa: E402
 PADSIM_TOLERANCES = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9]
 NGSPICE_TOLERANCES = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7]
 PADSIM_TIGHT = 1e-10          # padsim's cross-check run of the reference
+IDA_TIGHT = 1e-10             # SUNDIALS IDA's reference run on padsim's equations (bench/ida)
+IDA_REFERENCE = "SUNDIALS IDA on padsim's equations"
 # padsim's two output modes: rows on the .tran TSTEP grid from the interpolating polynomial
 # (the output density ngspice's default TMAX = TSTEP gives it; the primary series), and its
 # accepted steps only (the integrator's own points).
@@ -180,6 +182,27 @@ def run_padsim(padsim, netlist, probes, workdir, tag, extra=(), read=True, timeo
     return w
 
 
+def ida_reference_exe(args):
+    return os.path.join(args.build, "bench", "ida", "padsim_ida_reference")
+
+
+def run_ida_reference(args, netlist, probes, workdir, refine):
+    """bench/ida/padsim_ida_reference: IDA on padsim's equations for the netlist at rtol IDA_TIGHT,
+    rows at IDA's steps, events, corners and every TSTEP / refine."""
+    csv_path = os.path.join(workdir, "ida-reference.csv")
+    res = run_process([ida_reference_exe(args), netlist, csv_path, ",".join(probes), "%g" % IDA_TIGHT, str(refine)])
+    if res.returncode != 0:
+        raise sc.SimulationFailure(tail(res.stderr or res.stdout))
+    stats = {}
+    for line in res.stderr.splitlines():
+        if line.startswith("{"):
+            stats = json.loads(line)
+    header, columns = sc.read_csv(csv_path)
+    w = sc.Waveforms(columns[0], {p.lower(): columns[header.index(p.lower())] for p in probes}, res.seconds, "", stats)
+    w.steps = stats.get("steps")
+    return w
+
+
 def repeated(run, repeats):
     """Runs run(read=True) once and run(read=False) repeats-1 times: the first run's waveform,
     the median wall time of all."""
@@ -245,10 +268,11 @@ def circuit_table():
              reference=dict(options="reltol=1e-7 abstol=1e-14 vntol=1e-10", max_step=1e-8,
                             why="trapezoidal: over these 1,000 periods ngspice's gear at reltol 1e-7 moves by 3e-5 "
                                 "of the range between maximum steps of 10 ns and 5 ns, trap by 1e-5"),
-             periods=1000),
+             ida_reference=dict(refine=5), periods=1000),
         dict(name="boost", source="boost.cir", kind="switched", title="boost converter (circuits/boost.cir, 50 periods)",
              probes=["v(out)", "i(l1)", "v(sw)"], error_probes=["v(out)", "i(l1)"], crossing=crossing("boost"),
-             reference=dict(options=rr.tight_options(case("boost")), max_step=rr.tight_max_step(case("boost")))),
+             reference=dict(options=rr.tight_options(case("boost")), max_step=rr.tight_max_step(case("boost"))),
+             ida_reference=dict(refine=10)),
         dict(name="sc_integrator", source="sc_integrator.cir", kind="switched",
              title="switched-capacitor integrator (circuits/sc_integrator.cir)",
              probes=["v(out)", "v(c1a)"], error_probes=["v(out)"], crossing=crossing("sc_integrator"),
@@ -404,6 +428,17 @@ def work_precision_circuit(args, log, c):
         entry["reference"] = "closed form"
     elif c.get("bari"):
         entry["reference"] = "Bari test set reference at t = 0.2"
+    elif c.get("ida_reference") and os.path.exists(ida_reference_exe(args)):
+        try:
+            ida_run = run_ida_reference(args, netlist, probes, wd, c["ida_reference"]["refine"])
+            reference = rl.RunReference(ida_run, error_probes)
+            ref_crossings = crossings_of(ida_run, c["crossing"])
+            entry["reference"] = IDA_REFERENCE
+            entry["ida_reference"] = {"rtol": IDA_TIGHT, "seconds": ida_run.seconds, "points": len(ida_run.time),
+                                      "steps": ida_run.steps}
+        except sc.SimulationFailure as e:
+            entry["reference"] = None
+            entry["reference_failure"] = "padsim_ida_reference: %s" % e
     elif reference_run is not None:
         reference = rl.RunReference(reference_run, error_probes)
         ref_crossings = {(p, thr): sc.crossings(reference_run.time, reference_run.signals[p.lower()], thr, hyst)
@@ -630,7 +665,7 @@ def plot_circuit(name, entry, path, log):
                   "labels: log10 of the tolerance'" % (len(panels), name, REPEATS))
     floor = None
     pt = entry.get("padsim_tight", {}).get("error")
-    if entry.get("reference") == "ngspice tight" and pt:
+    if entry.get("reference") in ("ngspice tight", IDA_REFERENCE) and pt:
         floor = pt
     for key, ylabel in panels:
         script += ["set logscale xy", "set format x '%.0e'", "set format y '%.0e'", "set grid",
@@ -997,10 +1032,13 @@ def write_markdown(results, meta, out_path, img_rel):
              "(spicecmp's crossings with hysteresis, matched to the reference's nearest of the same direction), "
              "absolute and relative to the instant; missing and extra crossings are counted.")
     L.append("- **Reference.** A closed form where there is one (RLC step, relaxation oscillator, stiff cascade), "
-             "the Bari reference for the transistor amplifier, else ngspice at tight settings (tests/ngspice's "
+             "the Bari reference for the transistor amplifier; for buck_1000 and boost, SUNDIALS IDA at rtol 1e-10 "
+             "on padsim's equations for the netlist (bench/ida/padsim_ida_reference: padsim's devices and operating "
+             "point, IDA's own integration, root finding on the switches' guards and restarts at source corners; "
+             "rows at IDA's steps and every TSTEP / 5 or / 10), else ngspice at tight settings (tests/ngspice's "
              "reference: gear, reltol 1e-7 or what cases.json says, small maximum step). Cross-check: padsim at "
              "rtol 1e-10 against that reference, drawn as a dashed line (errors below it are not resolved); for the "
-             "closed forms, ngspice tight against them.")
+             "closed forms and IDA, ngspice tight against them too.")
     L.append("- **Time.** Wall time of the whole process (parse, operating point, transient, output), median of "
              "%d runs, one run at a time. *Own time* is what each reports itself: padsim's `--stats` wall_s (whole "
              "run), ngspice's `rusage` transient time (the transient analysis only)." % REPEATS)
@@ -1014,6 +1052,10 @@ def write_markdown(results, meta, out_path, img_rel):
         L.append("%s. `.tran %g %g`. Reference: %s." % (e["title"], e["tran"][0], e["tran"][1], e.get("reference") or
                                                         "none (%s)" % e.get("reference_failure")))
         extra = []
+        ir = e.get("ida_reference")
+        if ir:
+            extra.append("IDA reference (rtol %g): %.2f s, %s steps, %s rows" % (ir["rtol"], ir["seconds"], ir["steps"],
+                                                                           ir["points"]))
         nt = e.get("ngspice_tight", {})
         if "failure" in nt:
             extra.append("ngspice tight (%s) failed: %s" % (nt.get("options"), nt["failure"]))

@@ -51,8 +51,8 @@ report:
 	@scripts/install-deps.sh --bench
 	@cmake -S . -B $(BUILD)-bench -DCMAKE_BUILD_TYPE=Release -DPADSIM_BENCH=ON >/dev/null
 	@cmake --build $(BUILD)-bench -j$(JOBS) --target padsim padae_logical_function_bench
-	@cmake --build $(BUILD)-bench -j$(JOBS) --target padae_ida_compare || \
-	  echo "make report: padae_ida_compare not built (SUNDIALS missing?); the report says so"
+	@cmake --build $(BUILD)-bench -j$(JOBS) --target padae_ida_compare padsim_ida_reference || \
+	  echo "make report: the IDA comparison and reference not built (SUNDIALS missing?); the report says so"
 	python3 bench/report/run_report.py --build $(BUILD)-bench
 
 clean:

@@ -192,20 +192,32 @@ int IdaRun::roots(double t, N_Vector y, double* g) {
   return 0;
 }
 
-Eigen::MatrixXd IdaRun::charge_matrix(double t, const Vector& x) {
+EvalStatus IdaRun::load_dense(double t, const Vector& x, Vector& f, Eigen::MatrixXd& df_dx, Eigen::MatrixXd& dq_dx) {
   padae::Load load;
   load.f.setZero(n_);
   load.q.setZero(n_);
   load.df_dx.assign(load_.df_dx.size(), 0.0);
   load.dq_dx.assign(load_.df_dx.size(), 0.0);
   load.jacobian_requested = true;
-  model_.load(t, x, p_, load);
-  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(n_, n_);
+  const EvalStatus status = model_.load(t, x, p_, load);
+  f = load.f;
+  df_dx = Eigen::MatrixXd::Zero(n_, n_);
+  dq_dx = Eigen::MatrixXd::Zero(n_, n_);
   const auto& starts = model_.pattern().column_starts();
   const auto& rows = model_.pattern().row_indices();
   for (int column = 0; column < n_; ++column)
-    for (int k = starts[column]; k < starts[column + 1]; ++k) Q(rows[k], column) = load.dq_dx[k];
-  return Q;
+    for (int k = starts[column]; k < starts[column + 1]; ++k) {
+      df_dx(rows[k], column) = load.df_dx[k];
+      dq_dx(rows[k], column) = load.dq_dx[k];
+    }
+  return status;
+}
+
+Eigen::MatrixXd IdaRun::charge_matrix(double t, const Vector& x) {
+  Vector f;
+  Eigen::MatrixXd df_dx, dq_dx;
+  load_dense(t, x, f, df_dx, dq_dx);
+  return dq_dx;
 }
 
 bool IdaRun::charges_unchanged(const Vector& x) {
@@ -224,21 +236,11 @@ Vector IdaRun::consistent_rate(double t, const Vector& x) {
     model_.load(tt, x, p_, load);
     return Vector(load.f);
   };
-  Vector f = f_at(t);
   const double dt = 1e-7;
   Vector dfdt = (f_at(t + dt) - f_at(t - dt)) / (2 * dt);
-  padae::Load load;
-  load.f.setZero(n_);
-  load.q.setZero(n_);
-  load.df_dx.assign(load_.df_dx.size(), 0.0);
-  load.dq_dx.assign(load_.df_dx.size(), 0.0);
-  load.jacobian_requested = true;
-  model_.load(t, x, p_, load);
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n_, n_);
-  const auto& starts = model_.pattern().column_starts();
-  const auto& rows = model_.pattern().row_indices();
-  for (int column = 0; column < n_; ++column)
-    for (int k = starts[column]; k < starts[column + 1]; ++k) J(rows[k], column) = load.df_dx[k];
+  Vector f;
+  Eigen::MatrixXd J, dq_dx;
+  load_dense(t, x, f, J, dq_dx);
   Eigen::FullPivLU<Eigen::MatrixXd> lu(charge_.transpose());
   Eigen::MatrixXd null = lu.kernel();  // columns: left null vectors of Q
   if (lu.rank() == n_) null.resize(n_, 0);
@@ -264,31 +266,27 @@ bool IdaRun::calc_ic() {
 // F(t, y, y') = Q y' + f(t, y) = 0 for the algebraic y and the other unknowns' y', with the
 // differential y held; Newton's step scaled by the model's limit. Dense: a reference's sizes.
 bool IdaRun::limited_newton_ic() {
-  Vector x = y(), rate = yp();
-  padae::Load load;
-  load.df_dx.assign(load_.df_dx.size(), 0.0);
-  load.dq_dx.assign(load_.df_dx.size(), 0.0);
-  const auto& starts = model_.pattern().column_starts();
-  const auto& rows = model_.pattern().row_indices();
+  Vector x = y(), rate = yp(), f;
+  Eigen::MatrixXd df_dx, dq_dx;
   double previous_worst = INFINITY;
   for (int iteration = 0; iteration < settings_.max_initial_condition_iterations; ++iteration) {
-    load.f.setZero(n_);
-    load.q.setZero(n_);
-    std::fill(load.df_dx.begin(), load.df_dx.end(), 0.0);
-    load.jacobian_requested = true;
-    if (model_.load(t_, x, p_, load) != EvalStatus::ok) return false;
+    if (load_dense(t_, x, f, df_dx, dq_dx) != EvalStatus::ok) return false;
     Vector r(n_);
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n_, n_);
     for (int i = 0; i < n_; ++i) {
-      const bool auxiliary = model_.kind(i) == UnknownKind::auxiliary;
-      r[i] = auxiliary ? rate[i] : load.f[i] + charge_.row(i).dot(rate);
-      if (model_.kind(i) == UnknownKind::algebraic) {
-        for (int k = starts[i]; k < starts[i + 1]; ++k)
-          if (model_.kind(rows[k]) != UnknownKind::auxiliary) J(rows[k], i) = load.df_dx[k];
-      } else if (auxiliary) {
-        J(i, i) = 1;
-      } else {
-        J.col(i) = charge_.col(i);
+      switch (model_.kind(i)) {
+        case UnknownKind::auxiliary:
+          r[i] = rate[i];
+          J(i, i) = 1;
+          break;
+        case UnknownKind::algebraic:
+          r[i] = f[i] + charge_.row(i).dot(rate);
+          J.col(i) = df_dx.col(i);
+          break;
+        case UnknownKind::differential:
+          r[i] = f[i] + charge_.row(i).dot(rate);
+          J.col(i) = charge_.col(i);
+          break;
       }
     }
     const Vector du = -J.fullPivLu().solve(r);

@@ -98,6 +98,8 @@ class IdaRun {
 
  private:
   void load_at(N_Vector y, bool jacobian);
+  // f and the dense df/dx and dq/dx at (t, x) under the present predicates.
+  padae::EvalStatus load_dense(double t, const Vector& x, Vector& f, Eigen::MatrixXd& df_dx, Eigen::MatrixXd& dq_dx);
   Eigen::MatrixXd charge_matrix(double t, const Vector& x);
   Vector consistent_rate(double t, const Vector& x);
   bool calc_ic();

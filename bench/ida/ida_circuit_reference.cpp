@@ -2,9 +2,9 @@
 // builds from the netlist (its mna::Model, a padae::System), from padsim's operating point (or
 // the uic state), at a tight tolerance. It shares padsim's devices and start, not its
 // integrator: IDA's own BDF, error test and step control, its root finder on the guards (the
-// switch instants), a restart at every source corner (IDAReInit + IDACalcIC), and IDA's
-// interpolant for the output. The report cross-checks it against ngspice at tight settings,
-// which shares nothing with padsim.
+// switch instants), a restart at every source corner and event (from a state made consistent by
+// a Newton the model limits), and IDA's interpolant for the output. The report cross-checks it
+// against ngspice at tight settings, which shares nothing with padsim.
 //
 // Rows: IDA's own steps, a uniform grid of TSTEP / refine from IDA's interpolant between them,
 // the source corners, and both sides of every event: a linear interpolation of the reference is
@@ -119,7 +119,7 @@ int reference(const std::string& netlist_path, const std::string& csv_path, cons
       case ida_bench::Outcome::stop:
         row(ida.t(), ida.y());
         if (ida.t() < tran.stop) {
-          ida.restart();
+          ida.restart(fmt::format("at the source corner t = {}", ida.t()));
           corner = std::min(model.next_time_event(ida.t()), tran.stop);
         }
         break;

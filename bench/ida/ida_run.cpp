@@ -73,6 +73,7 @@ IdaRun::IdaRun(padae::System& model, double t0, const Vector& x0, const Predicat
   y_ = N_VNew_Serial(n_, context_);
   yp_ = N_VNew_Serial(n_, context_);
   id_ = N_VNew_Serial(n_, context_);
+  interpolated_ = N_VNew_Serial(n_, context_);
   N_Vector atol = N_VNew_Serial(n_, context_);
   for (int i = 0; i < n_; ++i) {
     NV_Ith_S(y_, i) = x0[i];
@@ -105,7 +106,7 @@ IdaRun::IdaRun(padae::System& model, double t0, const Vector& x0, const Predicat
     IDARootInit(ida_, model.predicate_count(), roots_callback);
     IDASetNoInactiveRootWarn(ida_);
   }
-  if ((settings_.semi_explicit || settings_.calc_ic_at_start) && !calc_ic()) fail("IDACalcIC at t0");
+  if (settings_.semi_explicit || settings_.calc_ic_at_start) restart("at t0");
 }
 
 IdaRun::~IdaRun() {
@@ -115,6 +116,7 @@ IdaRun::~IdaRun() {
   N_VDestroy(y_);
   N_VDestroy(yp_);
   N_VDestroy(id_);
+  N_VDestroy(interpolated_);
   SUNContext_Free(&context_);
 }
 
@@ -255,12 +257,20 @@ Vector IdaRun::consistent_rate(double t, const Vector& x) {
   return S.colPivHouseholderQr().solve(rhs);
 }
 
-bool IdaRun::calc_ic() {
-  if (settings_.limited_newton_initial_conditions) return limited_newton_ic();
-  const double t_next = t_ + 1e-3 * span_;
-  if (IDACalcIC(ida_, IDA_YA_YDP_INIT, t_next) != IDA_SUCCESS) return false;
-  IDAGetConsistentIC(ida_, y_, yp_);
-  return true;
+// IDA starts again at t_ from y_ and y_' made consistent: by IDACalcIC, which works on the
+// state IDA holds (IDAReInit first), or by the limited Newton, whose result IDA then takes.
+void IdaRun::restart(const std::string& where) {
+  total_ = total_ + read_counters(ida_);  // IDAReInit zeroes IDA's counters
+  bool consistent = true;
+  if (settings_.limited_newton_initial_conditions) {
+    consistent = limited_newton_ic();
+    IDAReInit(ida_, t_, y_, yp_);
+  } else {
+    IDAReInit(ida_, t_, y_, yp_);
+    consistent = IDACalcIC(ida_, IDA_YA_YDP_INIT, t_ + 1e-3 * span_) == IDA_SUCCESS;
+    if (consistent) IDAGetConsistentIC(ida_, y_, yp_);
+  }
+  if (!consistent) fail("IDACalcIC " + where);
 }
 
 // F(t, y, y') = Q y' + f(t, y) = 0 for the algebraic y and the other unknowns' y', with the
@@ -314,7 +324,6 @@ bool IdaRun::limited_newton_ic() {
         NV_Ith_S(y_, i) = x[i];
         NV_Ith_S(yp_, i) = rate[i];
       }
-      IDAReInit(ida_, t_, y_, yp_);  // IDA restarts from the consistent values (its counters are kept in total_)
       return true;
     }
   }
@@ -338,18 +347,10 @@ Outcome IdaRun::solve(double tout, double tstop, int task) {
 }
 
 Vector IdaRun::interpolate(double t) {
-  N_Vector v = N_VNew_Serial(n_, context_);
-  IDAGetDky(ida_, t, 0, v);
+  IDAGetDky(ida_, t, 0, interpolated_);
   Vector out(n_);
-  for (int i = 0; i < n_; ++i) out[i] = NV_Ith_S(v, i);
-  N_VDestroy(v);
+  for (int i = 0; i < n_; ++i) out[i] = NV_Ith_S(interpolated_, i);
   return out;
-}
-
-void IdaRun::restart() {
-  total_ = total_ + read_counters(ida_);
-  IDAReInit(ida_, t_, y_, yp_);
-  if (!calc_ic()) fail("IDACalcIC at t = " + std::to_string(t_));
 }
 
 bool IdaRun::event(int& first_flipped) {
@@ -383,12 +384,8 @@ bool IdaRun::event(int& first_flipped) {
     for (int k = 0; k < K; ++k)
       if (e[k] != 0) p_[static_cast<std::size_t>(k)] = e[k] > 0;
     for (int i = 0; i < n_; ++i) NV_Ith_S(y_, i) = x[i];
-    total_ = total_ + read_counters(ida_);
-    IDAReInit(ida_, t_, y_, yp_);
-    if (!calc_ic()) {
-      fail("IDACalcIC after the event at t = " + std::to_string(t_));
-      break;
-    }
+    restart("after the event at t = " + std::to_string(t_));
+    if (!ok()) break;
     x = y();
     const Vector xdot = yp();
     const double dt = 1e-7 * std::max(std::abs(t_), 1e-3);

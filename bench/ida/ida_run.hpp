@@ -80,8 +80,9 @@ class IdaRun {
   // event); if so the jumps, the fixed point and the restart are done. first_flipped: the first
   // predicate that flipped.
   bool event(int& first_flipped);
-  // A restart where the equations' time dependence has a corner (a source's breakpoint).
-  void restart();
+  // A restart at the present t (a source's corner, or after an event's flips and jumps); `where`
+  // completes the failure message.
+  void restart(const std::string& where);
 
   double t() const { return t_; }
   Vector y() const;
@@ -102,7 +103,6 @@ class IdaRun {
   padae::EvalStatus load_dense(double t, const Vector& x, Vector& f, Eigen::MatrixXd& df_dx, Eigen::MatrixXd& dq_dx);
   Eigen::MatrixXd charge_matrix(double t, const Vector& x);
   Vector consistent_rate(double t, const Vector& x);
-  bool calc_ic();
   bool limited_newton_ic();
   Outcome solve(double tout, double tstop, int task);
   void fail(const std::string& why);
@@ -121,7 +121,7 @@ class IdaRun {
   std::string failure_;
   Counters total_;
   SUNContext context_ = nullptr;
-  N_Vector y_ = nullptr, yp_ = nullptr, id_ = nullptr;
+  N_Vector y_ = nullptr, yp_ = nullptr, id_ = nullptr, interpolated_ = nullptr;
   SUNMatrix matrix_ = nullptr;
   SUNLinearSolver solver_ = nullptr;
   void* ida_ = nullptr;

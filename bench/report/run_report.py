@@ -152,13 +152,7 @@ def run_padsim(padsim, netlist, probes, workdir, tag, extra=(), read=True, timeo
         os.remove(csv_path)
     cmd = sc.padsim_command(padsim, netlist, csv_path, probes, list(extra) + ["--stats", "--quiet"])
     res = run_process(cmd, timeout=timeout)
-    stats = {}
-    for line in res.stderr.splitlines():
-        if line.startswith("{"):
-            try:
-                stats = json.loads(line)
-            except ValueError:
-                pass
+    stats = json_statistics(res.stderr)
     if res.returncode != 0:
         errors = [l for l in res.stderr.splitlines() if "error" in l.lower() and not l.startswith("{")]
         why = errors[-1] if errors else tail(res.stderr or res.stdout)
@@ -182,6 +176,18 @@ def run_padsim(padsim, netlist, probes, workdir, tag, extra=(), read=True, timeo
     return w
 
 
+def json_statistics(stderr):
+    """The statistics line ({...}) padsim --stats and padsim_ida_reference print on stderr."""
+    stats = {}
+    for line in stderr.splitlines():
+        if line.startswith("{"):
+            try:
+                stats = json.loads(line)
+            except ValueError:
+                pass
+    return stats
+
+
 def ida_reference_exe(args):
     return os.path.join(args.build, "bench", "ida", "padsim_ida_reference")
 
@@ -193,10 +199,7 @@ def run_ida_reference(args, netlist, probes, workdir, refine):
     res = run_process([ida_reference_exe(args), netlist, csv_path, ",".join(probes), "%g" % IDA_TIGHT, str(refine)])
     if res.returncode != 0:
         raise sc.SimulationFailure(tail(res.stderr or res.stdout))
-    stats = {}
-    for line in res.stderr.splitlines():
-        if line.startswith("{"):
-            stats = json.loads(line)
+    stats = json_statistics(res.stderr)
     header, columns = sc.read_csv(csv_path)
     w = sc.Waveforms(columns[0], {p.lower(): columns[header.index(p.lower())] for p in probes}, res.seconds, "", stats)
     w.steps = stats.get("steps")

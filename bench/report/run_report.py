@@ -444,8 +444,7 @@ def work_precision_circuit(args, log, c):
             entry["reference_failure"] = "padsim_ida_reference: %s" % e
     elif reference_run is not None:
         reference = rl.RunReference(reference_run, error_probes)
-        ref_crossings = {(p, thr): sc.crossings(reference_run.time, reference_run.signals[p.lower()], thr, hyst)
-                         for p, thr, hyst in c["crossing"] or []}
+        ref_crossings = crossings_of(reference_run, c["crossing"])
         entry["reference"] = "ngspice tight"
     else:
         entry["reference"] = None

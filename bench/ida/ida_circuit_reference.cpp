@@ -79,7 +79,7 @@ int reference(const std::string& netlist_path, const std::string& csv_path, cons
   // Algebraic unknowns are out of the error test, as in padsim: the consistent start leaves
   // their y' at 0, and a node that follows a source's ramp would fail the test on that alone.
   ida_settings.suppress_algebraic = true;
-  ida_settings.calc_ic_at_start = true;
+  ida_settings.consistent_start = true;
   ida_settings.max_steps = 10000000;
   // A junction turning on, without SPICE's limiting of its voltage, takes IDA's Newton more
   // than its default iterations and attempts.

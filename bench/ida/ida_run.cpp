@@ -81,7 +81,7 @@ IdaRun::IdaRun(padae::System& model, double t0, const Vector& x0, const Predicat
     NV_Ith_S(id_, i) = model.kind(i) == UnknownKind::algebraic ? 0.0 : 1.0;
     NV_Ith_S(atol, i) = settings_.atol[i];
   }
-  if (!settings_.semi_explicit && !settings_.calc_ic_at_start) {
+  if (!settings_.semi_explicit && !settings_.consistent_start) {
     const Vector rate = consistent_rate(t0, x0);
     for (int i = 0; i < n_; ++i) NV_Ith_S(yp_, i) = rate[i];
   }
@@ -106,7 +106,7 @@ IdaRun::IdaRun(padae::System& model, double t0, const Vector& x0, const Predicat
     IDARootInit(ida_, model.predicate_count(), roots_callback);
     IDASetNoInactiveRootWarn(ida_);
   }
-  if (settings_.semi_explicit || settings_.calc_ic_at_start) restart("at t0");
+  if (settings_.semi_explicit || settings_.consistent_start) restart("at t0");
 }
 
 IdaRun::~IdaRun() {

@@ -37,9 +37,9 @@ struct IdaSettings {
   bool semi_explicit = false;
   // Leave algebraic unknowns out of the error test (padae tests the dynamic rows only).
   bool suppress_algebraic = true;
-  // The start's y': IDACalcIC (algebraic unknowns re-solved), else least squares on the charge
-  // form's equations and hidden constraints with x0 kept as given.
-  bool calc_ic_at_start = false;
+  // The start made consistent as at a restart (algebraic unknowns re-solved, y' found), else
+  // x0 kept as given and y' by least squares on the equations and their hidden constraints.
+  bool consistent_start = false;
   long max_steps = 300000;
   // Newton iterations per step attempt, failed Newton and error test attempts per step, and
   // IDACalcIC's Newton iterations (IDA's defaults: 4, 10, 10, 10).

@@ -315,7 +315,7 @@ class Session {
       }
       if (!integrator_->initialize(0, start.x, start.p)) {
         if (singular()) return bad_input;
-        return fail(0, integrator_->failure().reason, integrator_->failure().unknown);
+        return fail(integrator_->failure());
       }
       emit(0, integrator_->state());
 
@@ -331,7 +331,7 @@ class Session {
         const padae::StepOutcome outcome = integrator_->step(settings_.tstop);
         switch (outcome.kind) {
           case padae::StepKind::failed:
-            return fail(integrator_->failure().t, integrator_->failure().reason, integrator_->failure().unknown);
+            return fail(integrator_->failure());
           case padae::StepKind::event: {
             emit_inside(t_before, outcome.t);
             // Two rows at a discontinuity: the state just before and just after it.
@@ -382,12 +382,13 @@ class Session {
   }
   double wall_seconds() const { return std::chrono::duration<double>(Clock::now() - wall_start_).count(); }
 
-  int fail(double t, const std::string& why, int unknown) {
+  int fail(double t, const std::string& why, int unknown, const std::string& diagnosis = {}) {
     if (progress_) progress_->clear();
-    print_error(fmt::format("simulation failed at t = {:.9g} s: {}{}", t, name_predicates(*model_, why),
-                            blame(*model_, unknown)));
+    print_error(fmt::format("simulation failed at t = {:.9g} s: {}{}{}", t, name_predicates(*model_, why),
+                            blame(*model_, unknown), diagnosis.empty() ? "" : ": " + diagnosis));
     return simulation_failure;
   }
+  int fail(const padae::Failure& failure) { return fail(failure.t, failure.reason, failure.unknown, failure.diagnosis); }
   void emit(double t, const mna::Vector& x) {
     if (t >= tstart_) waveforms_.row(t, x);
   }

@@ -30,6 +30,7 @@
 
 #include "padae/damped_newton.hpp"
 #include "padae/dense_output.hpp"
+#include "padae/error_noise.hpp"
 #include "padae/newton_matrix.hpp"
 #include "padae/norms.hpp"
 #include "padae/reinitialization.hpp"
@@ -118,7 +119,9 @@ struct Integrator::Impl {
   void hold_matrix();
   int sign_on_branch(double t_new);
   void newton_correction(const CorrectorEquation& equation);
-  bool error_test(double& error_k, double& error_k_minus_1, int& order_new);
+  // The error the test measured, in tolerances, into `error`; error_k and error_k_minus_1 are
+  // the estimates at orders k and k - 1 that choose the next order.
+  bool error_test(double& error, double& error_k, double& error_k_minus_1, int& order_new);
   // The first step after a (re)start is the trapezoidal rule from the re-initialization's q'
   // (unless the order is held at 1); its error is tested as backward Euler's, the only estimate
   // one point allows, which bounds the trapezoidal rule's.
@@ -180,8 +183,8 @@ struct Integrator::Impl {
               bool record_flips);
   void restart(double t_at, const ConsistentState& consistent);
 
-  StepOutcome fail(double t_at, std::string reason, int unknown = -1) {
-    failure = Failure{t_at, std::move(reason), unknown};
+  StepOutcome fail(double t_at, std::string reason, int unknown = -1, std::string diagnosis = {}) {
+    failure = Failure{t_at, std::move(reason), unknown, std::move(diagnosis)};
     return {StepKind::failed, t_at};
   }
 
@@ -235,7 +238,7 @@ struct Integrator::Impl {
   bool corner_bends(double t_from);
   double first_bending_corner(double t_limit);
   EventRecord last_event;
-  Failure failure{0, "", -1};
+  Failure failure{0, "", -1, ""};
   double last_event_time = -std::numeric_limits<double>::infinity();
   double last_event_interval = std::numeric_limits<double>::infinity();
   int events_in_burst = 0;      // consecutive events within the time resolution
@@ -527,14 +530,15 @@ void Integrator::Impl::newton_correction(const CorrectorEquation& equation) {
 
 // IDA's IDATestError: local error at order k from the q correction, and the estimates at orders
 // k-1 and k-2 that decide whether to lower the order.
-bool Integrator::Impl::error_test(double& error_k, double& error_k_minus_1, int& order_new) {
+bool Integrator::Impl::error_test(double& error, double& error_k, double& error_k_minus_1, int& order_new) {
   correction_q = q_new - q_predicted;
   double norm_k = weighted_norm(correction_q, inverse_weight_q, options.norm);
   order_new = order;
   error_k_minus_1 = 0;
+  error = error_coefficient * norm_k;
   if (trapezoidal_method_step()) {
-    error_k = error_coefficient * norm_k;
-    return error_k <= 1.0;
+    error_k = error;
+    return error <= 1.0;
   }
   error_k = sigma[order] * norm_k;
   double terr_k = (order + 1) * error_k;
@@ -550,7 +554,7 @@ bool Integrator::Impl::error_test(double& error_k, double& error_k_minus_1, int&
       order_new = order - 1;
     }
   }
-  return error_coefficient * norm_k <= 1.0;
+  return error <= 1.0;
 }
 
 // The next step from the local error estimate of order error_order.
@@ -639,7 +643,8 @@ StepOutcome Integrator::Impl::step(double t_stop) {
 
   update_weights();
   int error_test_failures = 0, newton_failures = 0;
-  double error_k = 0, error_k_minus_1 = 0;
+  std::array<RejectedAttempt, kMaxErrorTestFailures> rejected{};
+  double error = 0, error_k = 0, error_k_minus_1 = 0;
   int order_new = order;
   bool ends_at_target = false;
   double corner = 0, target = t_stop;
@@ -690,14 +695,15 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       continue;
     }
 
-    if (!error_test(error_k, error_k_minus_1, order_new)) {
+    if (!error_test(error, error_k, error_k_minus_1, order_new)) {
       restore();
       ++statistics.rejected_error_test;
-      ++error_test_failures;
+      rejected[error_test_failures++] = {order, h, error};
       if (error_test_failures >= kMaxErrorTestFailures) {
         int worst = -1;
         weighted_max_norm(correction_q, inverse_weight_q, &worst);
-        return fail(t, "the error test failed repeatedly at t = " + format_time(t), worst);
+        return fail(t, "the error test failed repeatedly at t = " + format_time(t), worst,
+                    unfalling_error(std::span(rejected.data(), error_test_failures)));
       }
       double error_new = order_new == order ? error_k : error_k_minus_1;
       order = order_new;
@@ -835,7 +841,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       failure = Failure{t_at, "event accumulation (chattering) at t = " + format_time(t_at) +
                                   ": predicates " + which + " do not settle after " +
                                   std::to_string(options.max_event_iterations) + " flips",
-                        -1};
+                        -1, ""};
       return false;
     }
     last_event.iterations = iteration;
@@ -877,7 +883,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     }
     if (!consistent) {
       failure = Failure{t_at, reinitializer.failure_reason() + " at t = " + format_time(t_at),
-                        reinitializer.failure_unknown()};
+                        reinitializer.failure_unknown(), ""};
       return false;
     }
     if (predicate_count == 0) break;
@@ -891,7 +897,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     if (!evaluate_guards(t_at, consistent->x_impulse, guards_after) ||
         !evaluate_guards(t_at, consistent->x, guards_start) ||
         !evaluate_guards(consistent->t_heading, consistent->x_heading, guards_heading)) {
-      failure = Failure{t_at, "a guard function cannot be evaluated after the event at t = " + format_time(t_at), -1};
+      failure = Failure{t_at, "a guard function cannot be evaluated after the event at t = " + format_time(t_at), -1, ""};
       return false;
     }
     Predicates next = p;
@@ -1112,7 +1118,7 @@ bool Integrator::initialize(double t0, const Vector& x0) {
   if (impl_->predicate_count > 0) {
     Vector guards(impl_->predicate_count);
     if (!impl_->evaluate_guards(t0, x0, guards)) {
-      impl_->failure = Failure{t0, "a guard function cannot be evaluated at the initial state", -1};
+      impl_->failure = Failure{t0, "a guard function cannot be evaluated at the initial state", -1, ""};
       return false;
     }
     for (int k = 0; k < impl_->predicate_count; ++k) p0[k] = guards[k] > 0;
@@ -1123,7 +1129,7 @@ bool Integrator::initialize(double t0, const Vector& x0) {
 bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   Impl& s = *impl_;
   if (x0.size() != s.n || static_cast<int>(p0.size()) != s.predicate_count) {
-    s.failure = Failure{t0, "initial state has the wrong size", -1};
+    s.failure = Failure{t0, "initial state has the wrong size", -1, ""};
     return false;
   }
   s.t = t0;

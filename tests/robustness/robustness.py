@@ -799,6 +799,40 @@ def case_newton_divergence(c):
     c.stats_figure(r)
 
 
+def relaxation_cap(t, rc=1e-3):
+    """v(cap) of circuits/relaxation_oscillator.cir from 3 V: down towards -5 V until -2.5 V
+    (t1 = RC ln 3.2), then between +-2.5 V towards +-5 V, each half period RC ln 3."""
+    t1, half = rc * math.log(3.2), rc * math.log(3.0)
+    if t <= t1:
+        return -5 + 8 * math.exp(-t / rc)
+    k = math.floor((t - t1) / half)
+    rising = k % 2 == 0
+    target, start = (5.0, -2.5) if rising else (-5.0, 2.5)
+    return target + (start - target) * math.exp(-(t - t1 - k * half) / rc)
+
+
+def case_tolerance_below_roundoff(c):
+    r = c.run(tag="default")
+    c.expect(r.returncode == 1, f"exit 1 ({describe_status(r.returncode)})")
+    tf = r.failure_time()
+    rc = 1e-3
+    zeros = [rc * (math.log(3.2) + k * math.log(3.0) + math.log(1.5)) for k in range(9)]
+    nearest = min(zeros, key=lambda z: abs(z - tf)) if tf is not None else None
+    # Its tolerance, 1e-12 |v(cap)| + 1e-15 V, is at round-off while |v(cap)| < 1e-3 V: within
+    # 0.2 us of the zero at its slope of 5 V/ms.
+    c.expect(tf is not None and abs(tf - nearest) <= 1e-6,
+             f"stopped at t = {g(tf)} s, where v(cap) crosses zero ({g(nearest)} s, within 1 us)", key=True)
+    c.expect("node cap" in r.stderr and "did not fall with the step" in r.stderr and "round-off" in r.stderr,
+             "the diagnostic names node cap, says the error did not fall with the step and calls it round-off",
+             key=True)
+    c.figure("diagnostic: " + r.error_text())
+    if r.rows:
+        err, at = max_error(r, "v(cap)", relaxation_cap)
+        c.expect(len(r.rows) >= 10 and err <= 1e-6,
+                 f"rows kept: {len(r.rows)}, following the closed form to {g(err)} V (at {g(at)} s; <= 1e-6 V)")
+    c.stats_figure(r)
+
+
 def kill_case(c, sig):
     csv_path = c.workdir / "killed.csv"
     if csv_path.exists():
@@ -934,6 +968,7 @@ NUMERIC_CASES = [
     ("events", "source_jump_fast_rc", case_source_jump_fast_rc),
     ("faults", "log_negative_off_path", case_log_negative_off_path),
     ("faults", "newton_divergence", case_newton_divergence),
+    ("faults", "tolerance_below_roundoff", case_tolerance_below_roundoff),
     ("faults", "killed_sigterm", case_killed_sigterm),
     ("faults", "killed_sigkill", case_killed_sigkill),
     ("faults", "power_at_zero", case_power_at_zero),

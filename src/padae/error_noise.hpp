@@ -1,7 +1,8 @@
 // Whether the errors of a step's rejected attempts came from the step. A truncation error falls
 // as h^(order + 1); one that does not fall with the step is noise no step removes: round-off
 // (a tolerance below what double precision resolves) or a jump of the model inside the step.
-// When the error test gives up, this tells the user which of the two kinds of failure it was.
+// When the error test gives up, this tells the user whether it was the step's truncation error
+// or such noise.
 #pragma once
 
 #include <span>

@@ -17,8 +17,8 @@ std::vector<RejectedAttempt> order_one_truncation(double h, double error, int co
 
 TEST(UnfallingError, ErrorsThatFallAsTruncationDoAreNotNoise) {
   EXPECT_EQ(unfalling_error(order_one_truncation(1.6e-7, 4.1e7, 7)), "");
-  // Falling a few times slower than predicted (the derivative changes between attempts) is
-  // still truncation.
+  // Falling 20 x slower than predicted (the derivative changes between attempts) is still
+  // taken for truncation.
   EXPECT_EQ(unfalling_error(std::vector<RejectedAttempt>{{3, 1e-3, 50}, {3, 2.5e-4, 50 * std::pow(0.25, 4) * 20}}), "");
 }
 

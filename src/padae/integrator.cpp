@@ -238,7 +238,7 @@ struct Integrator::Impl {
   bool corner_bends(double t_from);
   double first_bending_corner(double t_limit);
   EventRecord last_event;
-  Failure failure{0, "", -1, ""};
+  Failure failure{0, "", -1};
   double last_event_time = -std::numeric_limits<double>::infinity();
   double last_event_interval = std::numeric_limits<double>::infinity();
   int events_in_burst = 0;      // consecutive events within the time resolution
@@ -643,7 +643,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
 
   update_weights();
   int error_test_failures = 0, newton_failures = 0;
-  std::array<RejectedAttempt, kMaxErrorTestFailures> rejected{};
+  std::array<RejectedAttempt, kMaxErrorTestFailures> rejected;  // the first error_test_failures
   double error = 0, error_k = 0, error_k_minus_1 = 0;
   int order_new = order;
   bool ends_at_target = false;
@@ -841,7 +841,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       failure = Failure{t_at, "event accumulation (chattering) at t = " + format_time(t_at) +
                                   ": predicates " + which + " do not settle after " +
                                   std::to_string(options.max_event_iterations) + " flips",
-                        -1, ""};
+                        -1};
       return false;
     }
     last_event.iterations = iteration;
@@ -883,7 +883,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     }
     if (!consistent) {
       failure = Failure{t_at, reinitializer.failure_reason() + " at t = " + format_time(t_at),
-                        reinitializer.failure_unknown(), ""};
+                        reinitializer.failure_unknown()};
       return false;
     }
     if (predicate_count == 0) break;
@@ -897,7 +897,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     if (!evaluate_guards(t_at, consistent->x_impulse, guards_after) ||
         !evaluate_guards(t_at, consistent->x, guards_start) ||
         !evaluate_guards(consistent->t_heading, consistent->x_heading, guards_heading)) {
-      failure = Failure{t_at, "a guard function cannot be evaluated after the event at t = " + format_time(t_at), -1, ""};
+      failure = Failure{t_at, "a guard function cannot be evaluated after the event at t = " + format_time(t_at), -1};
       return false;
     }
     Predicates next = p;
@@ -1118,7 +1118,7 @@ bool Integrator::initialize(double t0, const Vector& x0) {
   if (impl_->predicate_count > 0) {
     Vector guards(impl_->predicate_count);
     if (!impl_->evaluate_guards(t0, x0, guards)) {
-      impl_->failure = Failure{t0, "a guard function cannot be evaluated at the initial state", -1, ""};
+      impl_->failure = Failure{t0, "a guard function cannot be evaluated at the initial state", -1};
       return false;
     }
     for (int k = 0; k < impl_->predicate_count; ++k) p0[k] = guards[k] > 0;
@@ -1129,7 +1129,7 @@ bool Integrator::initialize(double t0, const Vector& x0) {
 bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   Impl& s = *impl_;
   if (x0.size() != s.n || static_cast<int>(p0.size()) != s.predicate_count) {
-    s.failure = Failure{t0, "initial state has the wrong size", -1, ""};
+    s.failure = Failure{t0, "initial state has the wrong size", -1};
     return false;
   }
   s.t = t0;

@@ -106,7 +106,7 @@ struct Failure {
   double t;
   std::string reason;
   int unknown = -1;                  // the unknown that was worst, when one is to blame
-  std::string diagnosis;             // what the failure's figures say of its cause, if anything
+  std::string diagnosis = {};        // what the failure's figures say of its cause, if anything
 };
 
 class Integrator {

@@ -41,6 +41,11 @@ void apply_tolerances(const netlist::FlatCircuit& flat, const CommandOptions& op
   tolerances.current = options.atol.value_or(option("abstol", 1e-12));
   tolerances.voltage = options.atol.value_or(option("vntol", 1e-6));
   integrator.atol = tolerances.voltage;
+  // SPICE's vntol is reltol / 1000 of a 1 V signal; every unknown gets that ratio to its own
+  // scale: abstol's 1 pA, sized for IC currents, would hold an amp-scale inductor current
+  // passing through zero to a millionth of what its voltages get (a boost converter resolved a
+  // 2 ps L / R_off mode at every diode turn-off, 40 steps a period).
+  integrator.peak_floor = 1e-3;
 }
 
 // .options method=gear|trap, as ngspice names them; --method overrides. padsim's default is gear

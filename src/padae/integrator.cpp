@@ -283,6 +283,7 @@ struct Integrator::Impl {
   double convergence_factor = 20;
 
   Vector inverse_weight_x, inverse_weight_q, charge_weight;
+  Vector peak_magnitude, error_scale;  // largest |x| so far; the magnitude rtol applies to
   Vector x_predicted, q_predicted, q_derivative_predicted, x_new, q_new, delta, residual;
   double newton_start_fraction = 1;  // how far toward x_predicted Newton starts (predict())
   Vector correction_x, correction_q;
@@ -302,6 +303,7 @@ Integrator::Impl::Impl(System& system_in, Options options_in)
       reinitializer(system_in, newton, statistics, options, absolute_tolerance) {
   options.max_order = std::clamp(options.max_order, 1, options.method == Method::trapezoidal ? 2 : kMaxOrder);
   every_unknown.resize(n);
+  peak_magnitude.setZero(n);
   std::iota(every_unknown.begin(), every_unknown.end(), 0);
   for (auto& v : phi_x) v.setZero(n);
   for (auto& v : phi_q) v.setZero(n);
@@ -345,9 +347,11 @@ double Integrator::Impl::minimum_step() const {
 
 void Integrator::Impl::update_weights() {
   inverse_weight_x = (options.rtol * x.cwiseAbs() + absolute_tolerance).cwiseInverse();
+  peak_magnitude = peak_magnitude.cwiseMax(x.cwiseAbs());
   // The error is tested on the dynamic rows' q, in the units of x: a row's tolerance is the
   // charge its unknowns' tolerances represent (for q_i = x_i, IDA's rtol |x_i| + atol_i).
-  newton.charge_scale(options.rtol * x.cwiseAbs() + absolute_tolerance, charge_weight);
+  error_scale = x.cwiseAbs().cwiseMax(options.peak_floor * peak_magnitude);
+  newton.charge_scale(options.rtol * error_scale + absolute_tolerance, charge_weight);
   inverse_weight_q.resize(n);
   for (int i = 0; i < n; ++i)
     inverse_weight_q[i] = charge_weight[i] > 0 ? 1.0 / charge_weight[i] : 0.0;
@@ -1136,6 +1140,7 @@ bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   s.x = x0;
   s.p = p0;
   s.h = 0;
+  s.peak_magnitude = x0.cwiseAbs();
   s.located.clear();
   s.located_step = -1;
   s.midpoint_check.step = -1;

@@ -43,6 +43,11 @@ enum class Method { bdf, trapezoidal };
 struct Options {
   double rtol = 1e-4;
   double atol = 1e-6;              // default absolute tolerance, see System::absolute_tolerance
+  // The error test holds each unknown to rtol * max(|x_i|, peak_floor * peak_i) + atol_i, peak_i
+  // the largest |x_i| so far: a signal passing through zero is then not resolved far below its
+  // own scale (an amp-scale inductor current near 0 A against an atol of picoamperes).
+  // 0 (the default): rtol |x_i| + atol_i, IDA's test. Newton's convergence test is unchanged.
+  double peak_floor = 0.0;
   ErrorNorm norm = ErrorNorm::rms;
   Method method = Method::bdf;
   int max_order = 5;               // for bdf (trapezoidal is order 2)

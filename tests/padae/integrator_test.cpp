@@ -85,6 +85,32 @@ TEST(Integrator, OscillatorOverTenPeriodsReachesHighOrder) {
   EXPECT_LT(integrator.statistics().steps, 3000);
 }
 
+// Options::peak_floor: with an absolute tolerance far below the signal (1e-30 beside a start of
+// 1), rtol |x| + atol holds a decay's tail to rtol of itself however small it gets, a step per
+// fraction of the time constant for ever. With the floor, rtol applies to at least 1e-3 of the
+// peak: the error against e^-t, relative to the peak, stays at the tolerance, and once the tail
+// is below the floor the steps grow.
+TEST(Integrator, PeakFloorKeepsTheErrorRelativeToThePeakWithFewerSteps) {
+  long steps[2] = {0, 0};
+  const double floors[2] = {0.0, 1e-3};
+  for (int k = 0; k < 2; ++k) {
+    Decay decay(1.0);
+    Options options;
+    options.rtol = 1e-6;
+    options.atol = 1e-30;
+    options.peak_floor = floors[k];
+    Integrator integrator(decay, options);
+    ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+    double worst = 0;
+    ASSERT_TRUE(run_until(integrator, 100.0, [&](const StepOutcome&) {
+      worst = std::max(worst, std::abs(integrator.state()[0] - std::exp(-integrator.time())));
+    }));
+    EXPECT_LT(worst, 10 * options.rtol) << "peak_floor " << floors[k];
+    steps[k] = integrator.statistics().steps;
+  }
+  EXPECT_LT(steps[1], 0.5 * steps[0]) << steps[0] << " steps without the floor, " << steps[1] << " with it";
+}
+
 // The trapezoidal rule is A-stable without damping: x'' = -x keeps its amplitude over 1,000
 // periods at a loose tolerance, where BDF (its L-stable low orders) visibly damps it.
 TEST(Integrator, TrapezoidalKeepsAnUndampedOscillationsAmplitude) {

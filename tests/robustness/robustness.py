@@ -813,23 +813,13 @@ def relaxation_cap(t, rc=1e-3):
 
 def case_tolerance_below_roundoff(c):
     r = c.run(tag="default")
-    c.expect(r.returncode == 1, f"exit 1 ({describe_status(r.returncode)})")
-    tf = r.failure_time()
-    rc = 1e-3
-    zeros = [rc * (math.log(3.2) + k * math.log(3.0) + math.log(1.5)) for k in range(9)]
-    nearest = min(zeros, key=lambda z: abs(z - tf)) if tf is not None else None
-    # Its tolerance, 1e-12 |v(cap)| + 1e-15 V, is at round-off while |v(cap)| < 1e-3 V: within
-    # 0.2 us of the zero at its slope of 5 V/ms.
-    c.expect(tf is not None and abs(tf - nearest) <= 1e-6,
-             f"stopped at t = {g(tf)} s, where v(cap) crosses zero ({g(nearest)} s, within 1 us)", key=True)
-    c.expect("node cap" in r.stderr and "did not fall with the step" in r.stderr and "round-off" in r.stderr,
-             "the diagnostic names node cap, says the error did not fall with the step and calls it round-off",
-             key=True)
-    c.figure("diagnostic: " + r.error_text())
+    c.expect(r.returncode == 0, f"exit 0 ({describe_status(r.returncode)})", key=True)
+    c.expect(bool(r.rows) and r.rows[-1][0] >= 0.01 * (1 - 1e-12),
+             f"rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s", key=True)
     if r.rows:
+        # 2e-9 of the 5 V swing: a run at reltol 1e-6 is 1e-6 V off, at 1e-12 3.6e-10 V (measured).
         err, at = max_error(r, "v(cap)", relaxation_cap)
-        c.expect(len(r.rows) >= 10 and err <= 1e-6,
-                 f"rows kept: {len(r.rows)}, following the closed form to {g(err)} V (at {g(at)} s; <= 1e-6 V)")
+        c.expect(err <= 1e-8, f"v(cap) follows the closed form to {g(err)} V (at {g(at)} s; <= 1e-8 V)", key=True)
     c.stats_figure(r)
 
 

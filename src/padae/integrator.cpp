@@ -150,8 +150,9 @@ struct Integrator::Impl {
   // polynomial of any other unknown (an algebraic one, or one in a hidden algebraic direction
   // such as a floating capacitor's common mode) is measured once per step, at its midpoint
   // (near where the error of a polynomial between its last two points is largest), against
-  // step_solution there. A source corner the step passed reaches only algebraic unknowns
-  // (time_event_rows), which bend there where no polynomial can.
+  // step_solution there. A source corner the step passed reaches only the unknowns of its own
+  // block of the pattern, all algebraic (corner_can_reach), which bend there where no
+  // polynomial can.
   bool polynomial_serves(std::span<const int> unknowns);
   bool charges_determine(std::span<const int> unknowns);
   // The accepted step whose polynomial interpolate() and step_solution() use: previous_step
@@ -234,6 +235,9 @@ struct Integrator::Impl {
   // of the pattern with a differential unknown. A step ends on such a corner and passes the
   // others, whose sources only reach algebraic unknowns (exact at any instant).
   std::vector<char> row_bends_solution;
+  // Per unknown: whether it is in such a block without a differential unknown, the only
+  // unknowns a passed corner reaches (the blocks decouple).
+  std::vector<char> corner_can_reach;
   std::vector<int> corner_rows;
   bool corner_bends(double t_from);
   double first_bending_corner(double t_limit);
@@ -324,6 +328,8 @@ Integrator::Impl::Impl(System& system_in, Options options_in)
     if (system.kind(column) == UnknownKind::differential) block_is_dynamic[root(n + column)] = 1;
   row_bends_solution.resize(n);
   for (int row = 0; row < n; ++row) row_bends_solution[row] = block_is_dynamic[root(row)];
+  corner_can_reach.resize(n);
+  for (int column = 0; column < n; ++column) corner_can_reach[column] = !block_is_dynamic[root(n + column)];
 }
 
 // Whether the corner next_time_event(t_from) can bend the solution (if unsure, it can).
@@ -988,7 +994,7 @@ bool Integrator::Impl::polynomial_serves(std::span<const int> unknowns) {
   if (step.order == 0) return true;  // a point: no step yet
   if (step.corner_inside)
     for (int i : unknowns)
-      if (system.kind(i) == UnknownKind::algebraic) return false;
+      if (corner_can_reach[i]) return false;
   if (charges_determine(unknowns)) return true;
   if (midpoint_check.step != step.number) {
     const double midpoint = step.anchor - step.psi[0] / 2;

@@ -231,6 +231,88 @@ TEST(Events, StepsPassCornersThatCannotBendTheSolutionAndSampleTheGuardsThere) {
   }
 }
 
+// GateDrivenCounter's drive, gating a decay: x' = p - x / 10 from x = 1, y = 2 x, g = pulse(t).
+// Closed form: x = e^(-t/10), then relaxing towards 10 while p holds, from 1.105 to 1.135.
+class GatedDecay : public SemiExplicitSystem {
+ public:
+  GatedDecay() : SemiExplicitSystem({D, A, A}, {{0, 0}, {1, 1}, {2, 0}, {2, 2}}) {}
+  EvalStatus equations(double t, const Vector& z, const Predicates& p, Vector& out) override {
+    out[0] = (p[0] ? 1.0 : 0.0) - z[0] / 10;
+    out[1] = z[1] - pulse(t);
+    out[2] = z[2] - 2 * z[0];
+    return EvalStatus::ok;
+  }
+  int predicate_count() const override { return 1; }
+  EvalStatus guards(double, const Vector& z, Vector& out) const override {
+    out[0] = z[1] - 0.5;
+    return EvalStatus::ok;
+  }
+  double next_time_event(double t) const override {
+    for (double corner : kCorners)
+      if (corner > t) return corner;
+    return std::numeric_limits<double>::infinity();
+  }
+  bool time_event_rows(double, std::vector<int>& rows) const override {
+    rows.push_back(1);
+    return true;
+  }
+  static bool corner_between(double t_from, double t_to) {
+    return std::any_of(std::begin(kCorners), std::end(kCorners),
+                       [&](double corner) { return t_from < corner && corner < t_to; });
+  }
+  static double pulse(double t) {
+    if (t <= 1.1 || t >= 1.14) return 0;
+    if (t < 1.11) return (t - 1.1) / 0.01;
+    return t <= 1.13 ? 1.0 : (1.14 - t) / 0.01;
+  }
+  static double exact_x(double t) {
+    constexpr double kOn = 1.105, kOff = 1.135;
+    const double at_on = std::exp(-kOn / 10);
+    auto relaxing = [&](double s) { return 10 + (at_on - 10) * std::exp(-(s - kOn) / 10); };
+    if (t <= kOn) return std::exp(-t / 10);
+    if (t <= kOff) return relaxing(t);
+    return relaxing(kOff) * std::exp(-(t - kOff) / 10);
+  }
+
+ private:
+  static constexpr double kCorners[] = {1.1, 1.11, 1.13, 1.14};
+};
+
+// A corner the step passed reaches only its own block of the pattern: rows of g inside such a
+// step are solved (g's polynomial cannot bend at the corners), rows of y (algebraic, but in x's
+// block) are the step's polynomial, as in any step.
+TEST(Events, DenseOutputSolvesOnlyTheUnknownsAPassedCornerReaches) {
+  GatedDecay model;
+  Options options;
+  options.rtol = 1e-6;
+  options.atol = 1e-9;
+  Integrator integrator(model, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector{{1.0, 0.0, 2.0}})) << integrator.failure().reason;
+  const std::vector<int> only_g{1}, only_y{2};
+  int rows_past_corners = 0;
+  double worst_g = 0, worst_g_polynomial = 0, worst_y = 0;
+  double t_before = 0;
+  ASSERT_TRUE(run_until(integrator, 2.0, [&](const StepOutcome& outcome) {
+    const bool passed_corner = GatedDecay::corner_between(t_before, outcome.t);
+    for (double fraction : {0.1, 0.3, 0.5, 0.7, 0.9}) {
+      const double t_at = t_before + fraction * (outcome.t - t_before);
+      const double g = integrator.dense_output(t_at, only_g)[1];
+      const double y = integrator.dense_output(t_at, only_y)[2];
+      worst_y = std::max(worst_y, std::abs(y - 2 * GatedDecay::exact_x(t_at)));
+      if (!passed_corner) continue;
+      ++rows_past_corners;
+      worst_g = std::max(worst_g, std::abs(g - GatedDecay::pulse(t_at)));
+      worst_g_polynomial = std::max(worst_g_polynomial, std::abs(integrator.interpolate(t_at)[1] - GatedDecay::pulse(t_at)));
+      EXPECT_EQ(y, integrator.interpolate(t_at)[2]) << "t = " << t_at;
+    }
+    t_before = outcome.t;
+  })) << integrator.failure().reason;
+  EXPECT_GE(rows_past_corners, 10);
+  EXPECT_GT(worst_g_polynomial, 0.1);  // the case the test is about
+  EXPECT_LT(worst_g, 1e-9);
+  EXPECT_LT(worst_y, 1e-5);  // global error: a few tolerances of y's scale
+}
+
 // Without predicates no guard is ever evaluated; without jumps no jump matrix is asked for.
 class Counting : public SemiExplicitSystem {
  public:

@@ -30,22 +30,36 @@ using Clock = std::chrono::steady_clock;
 void print_error(const std::string& message) { fmt::print(stderr, "padsim: error: {}\n", message); }
 
 // .options reltol, abstol (currents), vntol (voltages), as ngspice names them; the command line
-// overrides. --atol sets the absolute tolerance of every unknown.
-void apply_tolerances(const netlist::FlatCircuit& flat, const CommandOptions& options, padae::Options& integrator,
+// overrides. --atol sets the absolute tolerance of every unknown. Returns false, having printed
+// the error, for a tolerance that is not positive.
+bool apply_tolerances(const netlist::FlatCircuit& flat, const CommandOptions& options, padae::Options& integrator,
                       mna::Tolerances& tolerances) {
+  bool positive = true;
   auto option = [&](const char* name, double fallback) {
     const netlist::Option* o = flat.find_option(name);
-    return o && o->number ? *o->number : fallback;
+    if (!o || !o->number) return fallback;
+    if (!(*o->number > 0)) {
+      fmt::print(stderr, "{}", netlist::format(netlist::Diagnostic{
+                                   netlist::Severity::error, o->where,
+                                   fmt::format("{} must be a positive number, got {}", name, *o->number)}));
+      positive = false;
+    }
+    return *o->number;
   };
   integrator.rtol = options.rtol.value_or(option("reltol", 1e-3));
   tolerances.current = options.atol.value_or(option("abstol", 1e-12));
   tolerances.voltage = options.atol.value_or(option("vntol", 1e-6));
+  if (!positive) return false;
+  if (integrator.rtol < padae::kSmallestRtol && !options.quiet)
+    fmt::print(stderr, "padsim: warning: reltol {} is below what double precision resolves; using {:.2g}\n",
+               integrator.rtol, padae::kSmallestRtol);
   integrator.atol = tolerances.voltage;
   // SPICE's vntol is reltol / 1000 of a 1 V signal; every unknown gets that ratio to its own
   // scale: abstol's 1 pA, sized for IC currents, would hold an amp-scale inductor current
   // passing through zero to a millionth of what its voltages get (a boost converter resolved a
   // 2 ps L / R_off mode at every diode turn-off, 40 steps a period).
   integrator.peak_floor = 1e-3;
+  return true;
 }
 
 // .options method=gear|trap, as ngspice names them; --method overrides. padsim's default is gear
@@ -248,7 +262,7 @@ class Session {
     tstart_ = flat->tran ? flat->tran->start : 0;
     uic_ = flat->tran && flat->tran->use_initial_conditions;
     mna::Tolerances tolerances;
-    apply_tolerances(*flat, options_, integrator_options_, tolerances);
+    if (!apply_tolerances(*flat, options_, integrator_options_, tolerances)) return bad_input;
     if (!apply_method(*flat, options_, integrator_options_)) return bad_input;
     settings_.reltol = integrator_options_.rtol;
     integrator_options_.time_scale = settings_.tstop;

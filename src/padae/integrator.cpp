@@ -105,6 +105,13 @@ double step_ratio(double error_estimate, int error_order) {
   return std::pow(2 * error_estimate + 1e-4, -1.0 / (error_order + 1));
 }
 
+// The options as the integrator uses them: the orders its method has, rtol at least kSmallestRtol.
+Options within_limits(Options options) {
+  options.max_order = std::clamp(options.max_order, 1, options.method == Method::trapezoidal ? 2 : kMaxOrder);
+  options.rtol = std::max(options.rtol, kSmallestRtol);
+  return options;
+}
+
 }  // namespace
 
 struct Integrator::Impl {
@@ -295,7 +302,7 @@ struct Integrator::Impl {
 
 Integrator::Impl::Impl(System& system_in, Options options_in)
     : system(system_in),
-      options(options_in),
+      options(within_limits(options_in)),
       n(system_in.size()),
       predicate_count(system_in.predicate_count()),
       absolute_tolerance(Vector::NullaryExpr(system_in.size(),
@@ -303,9 +310,8 @@ Integrator::Impl::Impl(System& system_in, Options options_in)
                                                return system_in.absolute_tolerance(
                                                    static_cast<int>(i), options_in.atol);
                                              })),
-      newton(system_in, statistics, absolute_tolerance / options_in.rtol),
+      newton(system_in, statistics, absolute_tolerance / options.rtol),
       reinitializer(system_in, newton, statistics, options, absolute_tolerance) {
-  options.max_order = std::clamp(options.max_order, 1, options.method == Method::trapezoidal ? 2 : kMaxOrder);
   every_unknown.resize(n);
   peak_magnitude.setZero(n);
   std::iota(every_unknown.begin(), every_unknown.end(), 0);

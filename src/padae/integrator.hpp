@@ -14,6 +14,7 @@
 //     }
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -40,8 +41,15 @@ enum class ErrorNorm { rms, max };
 //                 re-initialization's derivative.
 enum class Method { bdf, trapezoidal };
 
+// The smallest rtol the integrator uses; a smaller one is raised to it. Below a few units of
+// round-off the error test asks for less than double precision resolves, and only the steps on
+// which round-off happens to pass it are accepted: at rtol 1e-16 (vntol 1e-18 V) the relaxation
+// oscillator took 5 million steps, with 3 million rejected, to reach 1.7e-5 s of its 1e-2 s; at
+// 2.3e-16 it finishes in 9,056.
+inline constexpr double kSmallestRtol = 4 * std::numeric_limits<double>::epsilon();
+
 struct Options {
-  double rtol = 1e-4;
+  double rtol = 1e-4;              // at least kSmallestRtol
   double atol = 1e-6;              // default absolute tolerance, see System::absolute_tolerance
   // The error test holds each unknown to rtol * max(|x_i|, peak_floor * peak_i) + atol_i, peak_i
   // the largest |x_i| so far: a signal passing through zero is then not resolved far below its

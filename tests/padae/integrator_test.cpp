@@ -111,6 +111,26 @@ TEST(Integrator, PeakFloorKeepsTheErrorRelativeToThePeakWithFewerSteps) {
   EXPECT_LT(steps[1], 0.5 * steps[0]) << steps[0] << " steps without the floor, " << steps[1] << " with it";
 }
 
+// An rtol below double precision is raised to kSmallestRtol: the error test at rtol 1e-17 could
+// pass only by the chance of its round-off, and the steps would shrink without end. The decay
+// then runs to its end in a bounded number of steps, as close to e^-t as the floor's tolerance.
+TEST(Integrator, RtolBelowDoublePrecisionIsRaisedToTheSmallestThatResolves) {
+  Decay decay(1.0);
+  Options options;
+  options.rtol = 1e-17;
+  options.atol = 1e-30;
+  Integrator integrator(decay, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+  constexpr long kStepBudget = 100000;
+  double worst = 0;
+  while (integrator.time() < 5.0 && integrator.statistics().steps < kStepBudget) {
+    ASSERT_NE(integrator.step(5.0).kind, StepKind::failed) << integrator.failure().reason;
+    worst = std::max(worst, std::abs(integrator.state()[0] - std::exp(-integrator.time())));
+  }
+  EXPECT_EQ(integrator.time(), 5.0) << integrator.statistics().steps << " steps";
+  EXPECT_LT(worst, 1e-13);
+}
+
 // The trapezoidal rule is A-stable without damping: x'' = -x keeps its amplitude over 1,000
 // periods at a loose tolerance, where BDF (its L-stable low orders) visibly damps it.
 TEST(Integrator, TrapezoidalKeepsAnUndampedOscillationsAmplitude) {

@@ -217,14 +217,14 @@ class Context:
                     f"Newton {s.get('rejected_newton')}, domain {s.get('rejected_domain')}), events {s.get('events')}, "
                     f"jumps {s.get('jumps')}, wall {s.get('wall_s', 0):.3f} s")
 
-    def run(self, netlist=None, args=(), tag="run", events=False, csv_out=True, cwd=None, timeout=900):
+    def run(self, netlist=None, args=(), tag="run", events=False, csv_out=True, cwd=None, timeout=900, quiet=True):
         netlist = str(netlist or self.netlist)
         csv_path = self.workdir / f"{tag}.csv"
         events_path = self.workdir / f"{tag}.events.csv"
         for p in (csv_path, events_path):
             if p.exists():
                 p.unlink()
-        command = [self.padsim, netlist, "--stats", "-q"]
+        command = [self.padsim, netlist, "--stats"] + (["-q"] if quiet else [])
         if csv_out:
             command += ["-o", str(csv_path)]
         if events:
@@ -823,6 +823,21 @@ def case_tolerance_below_roundoff(c):
     c.stats_figure(r)
 
 
+def case_tolerance_below_double_precision(c):
+    # A minute bounds the run: before the floor, the first 2.4e-5 s took 30 s.
+    r = c.run(tag="default", timeout=60, quiet=False)
+    c.expect(r.returncode == 0, f"exit 0 ({describe_status(r.returncode)})", key=True)
+    c.expect("warning: reltol 1e-16 is below what double precision resolves; using 8.9e-16" in r.stderr,
+             "warns that reltol 1e-16 is raised to 8.9e-16")
+    c.expect(bool(r.rows) and r.rows[-1][0] >= 0.01 * (1 - 1e-12),
+             f"rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s", key=True)
+    if r.rows:
+        # As tolerance_below_roundoff's bound; measured 1.4e-12 V.
+        err, at = max_error(r, "v(cap)", relaxation_cap)
+        c.expect(err <= 1e-8, f"v(cap) follows the closed form to {g(err)} V (at {g(at)} s; <= 1e-8 V)", key=True)
+    c.stats_figure(r)
+
+
 def kill_case(c, sig):
     csv_path = c.workdir / "killed.csv"
     if csv_path.exists():
@@ -959,6 +974,7 @@ NUMERIC_CASES = [
     ("faults", "log_negative_off_path", case_log_negative_off_path),
     ("faults", "newton_divergence", case_newton_divergence),
     ("faults", "tolerance_below_roundoff", case_tolerance_below_roundoff),
+    ("faults", "tolerance_below_double_precision", case_tolerance_below_double_precision),
     ("faults", "killed_sigterm", case_killed_sigterm),
     ("faults", "killed_sigkill", case_killed_sigkill),
     ("faults", "power_at_zero", case_power_at_zero),

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include "padae/integrator.hpp"
@@ -169,19 +170,13 @@ TEST(Events, ChatteringIsDiagnosedWithTimeAndPredicate) {
   EXPECT_NE(integrator.failure().reason.find("predicates 0"), std::string::npos) << integrator.failure().reason;
 }
 
-// A gate drive read only by a guard: the algebraic g = pulse(t), a trapezoid with corners at
-// 1.1, 1.11, 1.13 and 1.14 (0 -> 1 -> 0), and the counter x' = p, p = (g > 0.5), which runs from
-// 1.105 to 1.135. g's row shares no block of the pattern with x, so its corners cannot bend the
-// solution; with forcing_row = 0 the same corners are declared to enter x's row instead.
-class GateDrivenCounter : public SemiExplicitSystem {
+// A gate drive read only by a guard: the algebraic g = z[1] = pulse(t), a trapezoid with corners
+// at 1.1, 1.11, 1.13 and 1.14 (0 -> 1 -> 0), and p = (g > 0.5), on from 1.105 to 1.135. The
+// corners are declared to enter row forcing_row; a model adds what p drives.
+class GateDriven : public SemiExplicitSystem {
  public:
-  explicit GateDrivenCounter(int forcing_row)
-      : SemiExplicitSystem({D, A}, {{0, 0}, {1, 1}}), forcing_row_(forcing_row) {}
-  EvalStatus equations(double t, const Vector& z, const Predicates& p, Vector& out) override {
-    out[0] = p[0] ? 1.0 : 0.0;
-    out[1] = z[1] - pulse(t);
-    return EvalStatus::ok;
-  }
+  GateDriven(std::vector<UnknownKind> kinds, std::vector<std::pair<int, int>> entries, int forcing_row)
+      : SemiExplicitSystem(std::move(kinds), std::move(entries)), forcing_row_(forcing_row) {}
   int predicate_count() const override { return 1; }
   EvalStatus guards(double, const Vector& z, Vector& out) const override {
     out[0] = z[1] - 0.5;
@@ -196,15 +191,32 @@ class GateDrivenCounter : public SemiExplicitSystem {
     rows.push_back(forcing_row_);
     return true;
   }
-
- private:
-  static constexpr double kCorners[] = {1.1, 1.11, 1.13, 1.14};
+  static bool corner_between(double t_from, double t_to) {
+    return std::any_of(std::begin(kCorners), std::end(kCorners),
+                       [&](double corner) { return t_from < corner && corner < t_to; });
+  }
   static double pulse(double t) {
     if (t <= 1.1 || t >= 1.14) return 0;
     if (t < 1.11) return (t - 1.1) / 0.01;
     return t <= 1.13 ? 1.0 : (1.14 - t) / 0.01;
   }
+
+ private:
+  static constexpr double kCorners[] = {1.1, 1.11, 1.13, 1.14};
   int forcing_row_;
+};
+
+// The counter x' = p, which runs from 1.105 to 1.135. g's row shares no block of the pattern
+// with x, so its corners cannot bend the solution; with forcing_row = 0 the same corners are
+// declared to enter x's row instead.
+class GateDrivenCounter : public GateDriven {
+ public:
+  explicit GateDrivenCounter(int forcing_row) : GateDriven({D, A}, {{0, 0}, {1, 1}}, forcing_row) {}
+  EvalStatus equations(double t, const Vector& z, const Predicates& p, Vector& out) override {
+    out[0] = p[0] ? 1.0 : 0.0;
+    out[1] = z[1] - pulse(t);
+    return EvalStatus::ok;
+  }
 };
 
 TEST(Events, StepsPassCornersThatCannotBendTheSolutionAndSampleTheGuardsThere) {
@@ -231,39 +243,16 @@ TEST(Events, StepsPassCornersThatCannotBendTheSolutionAndSampleTheGuardsThere) {
   }
 }
 
-// GateDrivenCounter's drive, gating a decay: x' = p - x / 10 from x = 1, y = 2 x, g = pulse(t).
-// Closed form: x = e^(-t/10), then relaxing towards 10 while p holds, from 1.105 to 1.135.
-class GatedDecay : public SemiExplicitSystem {
+// The same drive gating a decay: x' = p - x / 10 from x = 1, y = z[2] = 2 x. Closed form:
+// x = e^(-t/10), then relaxing towards 10 while p holds, from 1.105 to 1.135.
+class GatedDecay : public GateDriven {
  public:
-  GatedDecay() : SemiExplicitSystem({D, A, A}, {{0, 0}, {1, 1}, {2, 0}, {2, 2}}) {}
+  GatedDecay() : GateDriven({D, A, A}, {{0, 0}, {1, 1}, {2, 0}, {2, 2}}, 1) {}
   EvalStatus equations(double t, const Vector& z, const Predicates& p, Vector& out) override {
     out[0] = (p[0] ? 1.0 : 0.0) - z[0] / 10;
     out[1] = z[1] - pulse(t);
     out[2] = z[2] - 2 * z[0];
     return EvalStatus::ok;
-  }
-  int predicate_count() const override { return 1; }
-  EvalStatus guards(double, const Vector& z, Vector& out) const override {
-    out[0] = z[1] - 0.5;
-    return EvalStatus::ok;
-  }
-  double next_time_event(double t) const override {
-    for (double corner : kCorners)
-      if (corner > t) return corner;
-    return std::numeric_limits<double>::infinity();
-  }
-  bool time_event_rows(double, std::vector<int>& rows) const override {
-    rows.push_back(1);
-    return true;
-  }
-  static bool corner_between(double t_from, double t_to) {
-    return std::any_of(std::begin(kCorners), std::end(kCorners),
-                       [&](double corner) { return t_from < corner && corner < t_to; });
-  }
-  static double pulse(double t) {
-    if (t <= 1.1 || t >= 1.14) return 0;
-    if (t < 1.11) return (t - 1.1) / 0.01;
-    return t <= 1.13 ? 1.0 : (1.14 - t) / 0.01;
   }
   static double exact_x(double t) {
     constexpr double kOn = 1.105, kOff = 1.135;
@@ -273,9 +262,6 @@ class GatedDecay : public SemiExplicitSystem {
     if (t <= kOff) return relaxing(t);
     return relaxing(kOff) * std::exp(-(t - kOff) / 10);
   }
-
- private:
-  static constexpr double kCorners[] = {1.1, 1.11, 1.13, 1.14};
 };
 
 // A corner the step passed reaches only its own block of the pattern: rows of g inside such a

@@ -1033,14 +1033,18 @@ def write_markdown(results, meta, out_path, img_rel):
              "is the largest time difference between matched threshold crossings of the switching signal "
              "(spicecmp's crossings with hysteresis, matched to the reference's nearest of the same direction), "
              "absolute and relative to the instant; missing and extra crossings are counted.")
+    ida_circuits = [c for c in circuit_table() if c.get("ida_reference")]
+    ida_refines = sorted({c["ida_reference"]["refine"] for c in ida_circuits})
     L.append("- **Reference.** A closed form where there is one (RLC step, relaxation oscillator, stiff cascade), "
-             "the Bari reference for the transistor amplifier; for buck_1000 and boost, SUNDIALS IDA at rtol 1e-10 "
+             "the Bari reference for the transistor amplifier; for %s, SUNDIALS IDA at rtol %g "
              "on padsim's equations for the netlist (bench/ida/padsim_ida_reference: padsim's devices and operating "
              "point, IDA's own integration, root finding on the switches' guards and restarts at source corners; "
-             "rows at IDA's steps and every TSTEP / 5 or / 10), else ngspice at tight settings (tests/ngspice's "
+             "rows at IDA's steps and every TSTEP %s), else ngspice at tight settings (tests/ngspice's "
              "reference: gear, reltol 1e-7 or what cases.json says, small maximum step). Cross-check: padsim at "
-             "rtol 1e-10 against that reference, drawn as a dashed line (errors below it are not resolved); for the "
-             "closed forms and IDA, ngspice tight against them too.")
+             "rtol %g against that reference, drawn as a dashed line (errors below it are not resolved); for the "
+             "closed forms and IDA, ngspice tight against them too."
+             % (" and ".join(c["name"] for c in ida_circuits), IDA_TIGHT,
+                " or ".join("/ %d" % r for r in ida_refines), PADSIM_TIGHT))
     L.append("- **Time.** Wall time of the whole process (parse, operating point, transient, output), median of "
              "%d runs, one run at a time. *Own time* is what each reports itself: padsim's `--stats` wall_s (whole "
              "run), ngspice's `rusage` transient time (the transient analysis only)." % REPEATS)

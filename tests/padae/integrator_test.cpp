@@ -113,7 +113,7 @@ TEST(Integrator, PeakFloorKeepsTheErrorRelativeToThePeakWithFewerSteps) {
 
 // An rtol below double precision is raised to kSmallestRtol: the error test at rtol 1e-17 could
 // pass only by the chance of its round-off, and the steps would shrink without end. The decay
-// then runs to its end in a bounded number of steps, as close to e^-t as the floor's tolerance.
+// then runs to its end in a bounded number of steps, as close to e^-t as kSmallestRtol allows.
 TEST(Integrator, RtolBelowDoublePrecisionIsRaisedToTheSmallestThatResolves) {
   Decay decay(1.0);
   Options options;

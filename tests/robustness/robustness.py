@@ -829,7 +829,7 @@ def case_tolerance_below_roundoff(c):
 
 
 def case_tolerance_below_double_precision(c):
-    # A minute bounds the run: before the floor, the first 2.4e-5 s took 30 s.
+    # A minute bounds the run: before padae::kSmallestRtol, the first 1.7e-5 s took 20 s.
     r = c.run(tag="default", timeout=60, quiet=False)
     c.expect("warning: reltol 1e-16 is below what double precision resolves; using 8.9e-16" in r.stderr,
              "warns that reltol 1e-16 is raised to 8.9e-16")

@@ -67,6 +67,13 @@ std::vector<double> with_defaults(Waveform::Shape shape, std::vector<double> p, 
 // value() and next_corner() both use these very numbers, so that the integrator, which lands
 // exactly on a corner, and the function agree on which side it is.
 SourceFunction::PulseCorners SourceFunction::pulse_corners(double t, bool left) const {
+  // Strictly inside a period both sides agree on it.
+  if (last_period_ && t > last_period_->rise_start && t < last_period_->next_period) return *last_period_;
+  last_period_ = compute_pulse_corners(t, left);
+  return *last_period_;
+}
+
+SourceFunction::PulseCorners SourceFunction::compute_pulse_corners(double t, bool left) const {
   const double td = p_[2], tr = p_[3], tf = p_[4], pw = p_[5], per = p_[6], count = p_[7];
   auto start_of = [&](double k) { return td + k * per; };
   double k = t <= td ? 0 : std::floor((t - td) / per);
@@ -135,11 +142,15 @@ double SourceFunction::next_corner(double t) const {
   switch (shape_) {
     case Waveform::Shape::constant: return infinity;
     case Waveform::Shape::pulse: {
-      const PulseCorners here = pulse_corners(t, false);
-      for (const PulseCorners& c : {here, pulse_corners(here.next_period, false)})
+      auto first_after = [t](const PulseCorners& c) {
         for (double corner : {c.rise_start, c.rise_end, c.fall_start, c.fall_end})
           if (corner > t) return corner;
-      return infinity;
+        return infinity;
+      };
+      const PulseCorners here = pulse_corners(t, false);
+      const double in_this_period = first_after(here);
+      // The next period only when this one has no corner left (looking it up moves the cache).
+      return in_this_period < infinity ? in_this_period : first_after(pulse_corners(here.next_period, false));
     }
     case Waveform::Shape::sine: return p_[3] > t ? p_[3] : infinity;
     case Waveform::Shape::exponential:

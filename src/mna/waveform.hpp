@@ -3,6 +3,7 @@
 // must hit exactly.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "mna/circuit_spec.hpp"
@@ -29,10 +30,15 @@ class SourceFunction {
     double rise_start, rise_end, fall_start, fall_end, next_period;
   };
   PulseCorners pulse_corners(double t, bool left) const;
+  PulseCorners compute_pulse_corners(double t, bool left) const;
 
   Waveform::Shape shape_;
   std::vector<double> p_;  // parameters with defaults filled in
   double dc_;
+  // The period pulse_corners() found last: every load asks for the same one (the integrator,
+  // its output and its event location all evaluate inside one step), and finding it costs a
+  // division and a floor. Not thread-safe, as the model that owns it is not.
+  mutable std::optional<PulseCorners> last_period_;
 };
 
 }  // namespace mna

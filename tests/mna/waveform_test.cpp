@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include "mna/device.hpp"
 #include "mna/waveform.hpp"
@@ -42,6 +43,38 @@ TEST(Waveform, PulseCornersAgreeWithValuesAfterManyPeriods) {
       EXPECT_DOUBLE_EQ(v, 1) << "corner " << t;
       EXPECT_LT(after, 1) << "corner " << t;
     }
+  }
+}
+
+TEST(Waveform, PulseValuesAndCornersDoNotDependOnTheOrderOfQueries) {
+  // Queries jumping back and forth between periods (the integrator, its event location and its
+  // output each evaluate at their own times) each see their own period. Reference: ngspice's
+  // form of PULSE, by fmod of the time since TD.
+  const double v1 = 1, v2 = 5, td = 2e-6, tr = 1e-6, tf = 2e-6, pw = 3e-6, per = 10e-6;
+  SourceFunction f({Shape::pulse, {v1, v2, td, tr, tf, pw, per}}, 0, run, "v1");
+  auto pulse = [&](double t) {
+    if (t <= td) return v1;
+    const double tt = std::fmod(t - td, per);
+    if (tt < tr) return v1 + (v2 - v1) * tt / tr;
+    if (tt <= tr + pw) return v2;
+    if (tt < tr + pw + tf) return v2 + (v1 - v2) * (tt - tr - pw) / tf;
+    return v1;
+  };
+  auto next_corner = [&](double t) {
+    double next = infinity;
+    for (double m = std::max(0.0, std::floor((t - td) / per) - 1); m <= std::floor((t - td) / per) + 2; ++m) {
+      const double start = td + m * per;
+      for (double corner : {start, start + tr, start + tr + pw, start + tr + pw + tf})
+        if (corner > t) next = std::min(next, corner);
+    }
+    return next;
+  };
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> time(0, 100e-6);
+  for (int k = 0; k < 2000; ++k) {
+    const double t = time(random);
+    EXPECT_NEAR(f.value(t), pulse(t), 1e-9) << "t = " << t;
+    EXPECT_NEAR(f.next_corner(t), next_corner(t), 1e-18) << "t = " << t;
   }
 }
 

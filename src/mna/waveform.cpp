@@ -149,7 +149,8 @@ double SourceFunction::next_corner(double t) const {
       };
       const PulseCorners here = pulse_corners(t, false);
       const double in_this_period = first_after(here);
-      // The next period only when this one has no corner left (looking it up moves the cache).
+      // The next period only when this one has no corner left: looking it up replaces the period
+      // kept (last_period_).
       return in_this_period < infinity ? in_this_period : first_after(pulse_corners(here.next_period, false));
     }
     case Waveform::Shape::sine: return p_[3] > t ? p_[3] : infinity;

@@ -1,7 +1,8 @@
 #include "padae/error_noise.hpp"
 
 #include <cmath>
-#include <sstream>
+
+#include "padae/text.hpp"
 
 namespace padae {
 
@@ -12,13 +13,6 @@ namespace {
 constexpr double kNoiseExcess = 100;
 // Pairs closer than this in h say little: their predictions differ from 1 by too little.
 constexpr double kSmallerStep = 0.5;
-
-std::string format_short(double value) {
-  std::ostringstream text;
-  text.precision(2);
-  text << value;
-  return text.str();
-}
 
 double predicted_error(const RejectedAttempt& larger, double h) {
   return larger.error * std::pow(h / larger.h, larger.order + 1);
@@ -43,9 +37,9 @@ std::string unfalling_error(std::span<const RejectedAttempt> attempts) {
     }
   if (!larger) return {};
   return "the error did not fall with the step: at order " + std::to_string(larger->order) + ", " +
-         format_short(larger->error) + " tolerances at h = " + format_short(larger->h) + " s, " +
-         format_short(smaller->error) + " at " + format_short(smaller->h) + " s, where truncation gives " +
-         format_short(predicted_error(*larger, smaller->h)) +
+         format_number(larger->error, 2) + " tolerances at h = " + format_number(larger->h, 2) + " s, " +
+         format_number(smaller->error, 2) + " at " + format_number(smaller->h, 2) + " s, where truncation gives " +
+         format_number(predicted_error(*larger, smaller->h), 2) +
          "; it is round-off (a tolerance below what double precision resolves here) or a "
          "discontinuity of the model";
 }

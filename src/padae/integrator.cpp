@@ -26,7 +26,6 @@
 #include <numeric>
 #include <optional>
 #include <span>
-#include <sstream>
 
 #include "padae/damped_newton.hpp"
 #include "padae/dense_output.hpp"
@@ -35,6 +34,7 @@
 #include "padae/norms.hpp"
 #include "padae/reinitialization.hpp"
 #include "padae/root_finder.hpp"
+#include "padae/text.hpp"
 
 namespace padae {
 
@@ -90,13 +90,6 @@ double weighted_norm(const Vector& v, const Vector& inverse_weight, ErrorNorm ki
     ++count;
   }
   return count > 0 ? std::sqrt(sum / count) : 0.0;
-}
-
-std::string format_time(double t) {
-  std::ostringstream text;
-  text.precision(17);
-  text << t;
-  return text.str();
 }
 
 // IDA's step ratio: the step that brings a local error estimate of order error_order to half
@@ -652,7 +645,7 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
 }
 
 StepOutcome Integrator::Impl::step(double t_stop) {
-  if (!(t_stop > t)) return fail(t, "step() called with t_stop " + format_time(t_stop) + " not after t = " + format_time(t));
+  if (!(t_stop > t)) return fail(t, "step() called with t_stop " + format_number(t_stop, 17) + " not after t = " + format_number(t, 17));
   const double t_old = t;
   step_predicates = p;
   const Vector guards_old = guards_now;
@@ -674,7 +667,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     if (h < minimum_step() && !ends_at_target) {
       int worst = -1;
       weighted_max_norm(correction_q, inverse_weight_q, &worst);
-      return fail(t, "step size " + format_time(h) + " s fell below the minimum (round-off) at t = " + format_time(t), worst);
+      return fail(t, "step size " + format_number(h, 17) + " s fell below the minimum (round-off) at t = " + format_number(t, 17), worst);
     }
     rescale_first_step();
     set_coefficients();
@@ -704,7 +697,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
                               ? "the model cannot be evaluated (outside its domain) however small the step"
                               : "Newton's method does not converge however small the step";
         if (correction == NewtonOutcome::singular) worst = newton.singular_column();
-        return fail(t, why + " at t = " + format_time(t), worst);
+        return fail(t, why + " at t = " + format_number(t, 17), worst);
       }
       h *= 0.25;
       have_matrix = have_matrix && correction != NewtonOutcome::singular;
@@ -718,7 +711,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       if (error_test_failures >= kMaxErrorTestFailures) {
         int worst = -1;
         weighted_max_norm(correction_q, inverse_weight_q, &worst);
-        return fail(t, "the error test failed repeatedly at t = " + format_time(t), worst,
+        return fail(t, "the error test failed repeatedly at t = " + format_number(t, 17), worst,
                     unfalling_error(std::span(rejected.data(), error_test_failures)));
       }
       double error_new = order_new == order ? error_k : error_k_minus_1;
@@ -743,7 +736,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
 
   if (predicate_count > 0) {
     Vector guards_new(predicate_count);
-    if (!evaluate_guards(t, x, guards_new)) return fail(t, "a guard function cannot be evaluated at t = " + format_time(t));
+    if (!evaluate_guards(t, x, guards_new)) return fail(t, "a guard function cannot be evaluated at t = " + format_number(t, 17));
     // A corner the step passed can still bend a guard (the ramp of a gate drive): the guards
     // are sampled there too, and the first crossing is located between samples.
     double t_left = t_old;
@@ -751,7 +744,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     for (double passed = next_time_event; passed < t; passed = system.next_time_event(passed)) {
       Vector guards_passed(predicate_count);
       if (!evaluate_guards(passed, located_solution(passed), guards_passed))
-        return fail(passed, "a guard function cannot be evaluated at t = " + format_time(passed));
+        return fail(passed, "a guard function cannot be evaluated at t = " + format_number(passed, 17));
       if (crossed(guards_passed)) return handle_state_event(t_left, guards_left, passed, guards_passed);
       t_left = passed;
       guards_left = std::move(guards_passed);
@@ -804,7 +797,7 @@ StepOutcome Integrator::Impl::handle_state_event(double t_left, const Vector& gu
   auto guards_at = [&](double t_at, Vector& out) { return evaluate_guards(t_at, located_solution(t_at), out); };
   const double tolerance = 100 * kEps * (std::abs(t_right) + std::abs(h_used));
   Crossing crossing = locate_first_crossing(guards_at, p, t_left, guards_left, t_right, guards_right, tolerance);
-  if (!crossing.ok) return fail(t, "a guard function cannot be evaluated while locating an event near t = " + format_time(t));
+  if (!crossing.ok) return fail(t, "a guard function cannot be evaluated while locating an event near t = " + format_number(t, 17));
 
   const double t_event = crossing.t_right;
   const Vector x_before = located_solution(t_event);
@@ -825,8 +818,8 @@ StepOutcome Integrator::Impl::handle_state_event(double t_left, const Vector& gu
       if (target[k] != p[k]) which += (which.empty() ? "" : ", ") + std::to_string(k);
     t = t_event;
     x = x_before;
-    return fail(t_event, "event accumulation at t = " + format_time(limit) + ": the intervals between events of predicate " + which +
-                             " shrink to zero (Zeno behaviour); stopped at t = " + format_time(t_event));
+    return fail(t_event, "event accumulation at t = " + format_number(limit, 17) + ": the intervals between events of predicate " + which +
+                             " shrink to zero (Zeno behaviour); stopped at t = " + format_number(t_event, 17));
   }
 
   t = t_event;
@@ -854,7 +847,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       std::string which;
       for (int k = 0; k < predicate_count; ++k)
         if (flipped_here[k]) which += (which.empty() ? "" : ", ") + std::to_string(k);
-      failure = Failure{t_at, "event accumulation (chattering) at t = " + format_time(t_at) +
+      failure = Failure{t_at, "event accumulation (chattering) at t = " + format_number(t_at, 17) +
                                   ": predicates " + which + " do not settle after " +
                                   std::to_string(options.max_event_iterations) + " flips",
                         -1};
@@ -898,7 +891,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       }
     }
     if (!consistent) {
-      failure = Failure{t_at, reinitializer.failure_reason() + " at t = " + format_time(t_at),
+      failure = Failure{t_at, reinitializer.failure_reason() + " at t = " + format_number(t_at, 17),
                         reinitializer.failure_unknown()};
       return false;
     }
@@ -913,7 +906,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     if (!evaluate_guards(t_at, consistent->x_impulse, guards_after) ||
         !evaluate_guards(t_at, consistent->x, guards_start) ||
         !evaluate_guards(consistent->t_heading, consistent->x_heading, guards_heading)) {
-      failure = Failure{t_at, "a guard function cannot be evaluated after the event at t = " + format_time(t_at), -1};
+      failure = Failure{t_at, "a guard function cannot be evaluated after the event at t = " + format_number(t_at, 17), -1};
       return false;
     }
     Predicates next = p;

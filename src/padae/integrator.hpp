@@ -54,6 +54,7 @@ struct Options {
   // The error test holds each unknown to rtol * max(|x_i|, peak_floor * peak_i) + atol_i, peak_i
   // the largest |x_i| so far: a signal passing through zero is then not resolved far below its
   // own scale (an amp-scale inductor current near 0 A against an atol of picoamperes).
+  // A floor below 256 eps / rtol is raised to that: the round-off of an order-5 estimate.
   // 0 (the default): rtol |x_i| + atol_i, IDA's test. Newton's convergence test is unchanged.
   double peak_floor = 0.0;
   ErrorNorm norm = ErrorNorm::rms;

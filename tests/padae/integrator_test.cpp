@@ -111,6 +111,43 @@ TEST(Integrator, PeakFloorKeepsTheErrorRelativeToThePeakWithFewerSteps) {
   EXPECT_LT(steps[1], 0.5 * steps[0]) << steps[0] << " steps without the floor, " << steps[1] << " with it";
 }
 
+// y' = -cbrt(y), y(0) = 1: y = (1 - 2t/3)^(3/2) until t* = 3/2. Its k-th derivative grows like
+// (t* - t)^(3/2 - k) towards t*, as a junction's voltage does where its current falls to zero
+// (boost.cir in discontinuous conduction). A step rule that looks only at the last error keeps
+// the step until the error test fails; predicting the error's growth from the last two steps
+// cuts it before (over this sweep: 134 of 1,346 attempts failed without the prediction, 56 of
+// 1,312 with it).
+class CubeRootDecay : public SemiExplicitSystem {
+ public:
+  CubeRootDecay() : SemiExplicitSystem({D}) {}
+  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = -std::cbrt(z[0]);
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Integrator, ApproachingAGrowingDerivativeTheErrorTestRarelyFails) {
+  long attempts = 0, failed = 0;
+  for (double rtol : {1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9}) {
+    CubeRootDecay system;
+    Options options;
+    options.rtol = rtol;
+    options.atol = 1e-12;
+    Integrator integrator(system, options);
+    ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+    double worst = 0;
+    ASSERT_TRUE(run_until(integrator, 1.5, [&](const StepOutcome&) {
+      const double exact = std::pow(std::max(1 - 2 * integrator.time() / 3, 0.0), 1.5);
+      worst = std::max(worst, std::abs(integrator.state()[0] - exact));
+    })) << integrator.failure().reason;
+    EXPECT_LT(worst, 10 * rtol) << "rtol " << rtol;
+    const Statistics& statistics = integrator.statistics();
+    attempts += statistics.steps + statistics.rejected_error_test;
+    failed += statistics.rejected_error_test;
+  }
+  EXPECT_LT(failed, attempts / 15) << failed << " of " << attempts << " attempts failed the error test";
+}
+
 // An rtol below double precision is raised to kSmallestRtol: the error test at rtol 1e-17 could
 // pass only by the chance of its round-off, and the steps would shrink without end. The decay
 // then runs to its end in a bounded number of steps, as close to e^-t as kSmallestRtol allows.

@@ -92,10 +92,14 @@ double weighted_norm(const Vector& v, const Vector& inverse_weight, ErrorNorm ki
   return count > 0 ? std::sqrt(sum / count) : 0.0;
 }
 
+// IDA's: an error estimate, in tolerances, is taken to be at least this much (it says nothing
+// finer).
+constexpr double kErrorResolution = 1e-4;
+
 // IDA's step ratio: the step that brings a local error estimate of order error_order to half
 // the tolerance, relative to the one that made it.
 double step_ratio(double error_estimate, int error_order) {
-  return std::pow(2 * error_estimate + 1e-4, -1.0 / (error_order + 1));
+  return std::pow(2 * error_estimate + kErrorResolution, -1.0 / (error_order + 1));
 }
 
 // The options as the integrator uses them: the orders its method has, rtol at least kSmallestRtol.
@@ -370,8 +374,9 @@ void Integrator::Impl::update_weights() {
   // value, and these are units of the circuit's magnitudes, not of a node's value as it crosses
   // zero (the relaxation oscillator at reltol 2e-12, vntol 1e-16 failed the error test where
   // v(cap) crosses zero: 3.3 tolerances at h = 4.7e-6 s, 1.2 at 8.4e-7 s).
-  const double floor = options.peak_floor > 0 ? std::max(options.peak_floor, kEstimateRoundoff / options.rtol) : 0.0;
-  error_scale = x.cwiseAbs().cwiseMax(floor * peak_magnitude);
+  const double peak_fraction =
+      options.peak_floor > 0 ? std::max(options.peak_floor, kEstimateRoundoff / options.rtol) : 0.0;
+  error_scale = x.cwiseAbs().cwiseMax(peak_fraction * peak_magnitude);
   newton.charge_scale(options.rtol * error_scale + absolute_tolerance, charge_weight);
   inverse_weight_q.resize(n);
   for (int i = 0; i < n; ++i)
@@ -599,8 +604,7 @@ void Integrator::Impl::choose_step(double error_estimate, int error_order, doubl
 // conduction).
 double Integrator::Impl::error_growth(double error_k) const {
   if (last_accepted.order != order_used || last_accepted.error <= 0) return 1;
-  const double floor = 1e-4;  // step_ratio's: an error below it says nothing of its growth
-  const double growth = (error_k + floor) / (last_accepted.error + floor) *
+  const double growth = (error_k + kErrorResolution) / (last_accepted.error + kErrorResolution) *
                         std::pow(last_accepted.h / h_used, order_used + 1);
   return std::max(growth, 1.0);
 }

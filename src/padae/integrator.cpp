@@ -102,10 +102,19 @@ double step_ratio(double error_estimate, int error_order) {
   return std::pow(2 * error_estimate + kErrorResolution, -1.0 / (error_order + 1));
 }
 
-// The options as the integrator uses them: the orders its method has, rtol at least kSmallestRtol.
+// The error estimate's round-off relative to an unknown's peak: at order 5 the estimate is a
+// sixth difference of q, up to 2^6 times the few units of round-off in each value, and these are
+// units of the circuit's magnitudes, not of a node's value as it crosses zero (the relaxation
+// oscillator at reltol 2e-12, vntol 1e-16 failed the error test where v(cap) crosses zero:
+// 3.3 tolerances at h = 4.7e-6 s, 1.2 at 8.4e-7 s).
+constexpr double kEstimateRoundoff = 256 * kEps;
+
+// The options as the integrator uses them: the orders its method has, rtol at least
+// kSmallestRtol, and a peak floor (if any) at least the estimate's round-off.
 Options within_limits(Options options) {
   options.max_order = std::clamp(options.max_order, 1, options.method == Method::trapezoidal ? 2 : kMaxOrder);
   options.rtol = std::max(options.rtol, kSmallestRtol);
+  if (options.peak_floor > 0) options.peak_floor = std::max(options.peak_floor, kEstimateRoundoff / options.rtol);
   return options;
 }
 
@@ -133,7 +142,7 @@ struct Integrator::Impl {
   bool trapezoidal_method_step() const { return options.method == Method::trapezoidal && order == 2; }
   bool trapezoidal_step() const { return trapezoidal_method_step() || trapezoidal_start(); }
   void complete_step(double error_k, double error_k_minus_1, int order_new);
-  void choose_step(double error_estimate, int error_order, double h_max, double error_growth = 1);
+  void choose_step(double error_estimate, int error_order, double h_max, double error_growth);
   double error_growth(double error_k) const;
   void restore();
   void rescale_first_step();
@@ -356,9 +365,6 @@ double Integrator::Impl::first_bending_corner(double t_limit) {
   return std::numeric_limits<double>::infinity();
 }
 
-// The error estimate's round-off relative to an unknown's peak: 64 x 4 units (update_weights()).
-constexpr double kEstimateRoundoff = 256 * kEps;
-
 // Below this a step no longer advances t reliably.
 double Integrator::Impl::minimum_step() const {
   return std::max({options.min_step, 16 * kEps * std::abs(t), 1e-24 * options.time_scale});
@@ -369,14 +375,7 @@ void Integrator::Impl::update_weights() {
   peak_magnitude = peak_magnitude.cwiseMax(x.cwiseAbs());
   // The error is tested on the dynamic rows' q, in the units of x: a row's tolerance is the
   // charge its unknowns' tolerances represent (for q_i = x_i, IDA's rtol |x_i| + atol_i).
-  // A floor relative to the peak is raised to the error estimate's round-off: at order 5 the
-  // estimate is a sixth difference of q, up to 2^6 times the few units of round-off in each
-  // value, and these are units of the circuit's magnitudes, not of a node's value as it crosses
-  // zero (the relaxation oscillator at reltol 2e-12, vntol 1e-16 failed the error test where
-  // v(cap) crosses zero: 3.3 tolerances at h = 4.7e-6 s, 1.2 at 8.4e-7 s).
-  const double peak_fraction =
-      options.peak_floor > 0 ? std::max(options.peak_floor, kEstimateRoundoff / options.rtol) : 0.0;
-  error_scale = x.cwiseAbs().cwiseMax(peak_fraction * peak_magnitude);
+  error_scale = x.cwiseAbs().cwiseMax(options.peak_floor * peak_magnitude);
   newton.charge_scale(options.rtol * error_scale + absolute_tolerance, charge_weight);
   inverse_weight_q.resize(n);
   for (int i = 0; i < n; ++i)

@@ -1,5 +1,6 @@
 #include "padae/dense_output.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -21,6 +22,8 @@ constexpr double kFastContraction = 0.5;  // modified Newton goes on while it co
 // on it proves nothing.
 constexpr double kKeptMatrixDrift = 0.1;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
+// Equally spaced rows extrapolate with |weights| summing to 7 through three points.
+constexpr double kMaxAmplification = 8;
 
 }  // namespace
 
@@ -35,17 +38,39 @@ std::optional<Vector> DenseOutput::solve(long step, double t, const Vector* x_gu
                                          const Vector& q_polynomial, const Vector& q_derivative,
                                          const Predicates& p, double c) {
   if (!(c > 0) || !std::isfinite(c)) return std::nullopt;
+  if (last_.step != step) last_.count = 0;
   const Vector* start = x_guess ? x_guess : &x_polynomial;
-  if (!x_guess && last_.step == step) {
-    shifted_start_ = last_.x + (x_polynomial - last_.x_polynomial);
+  if (!x_guess && last_.count > 0) {
+    // Lagrange extrapolation through the newest of the last solutions' distances from S, as
+    // many as it does not amplify their Newton error by more than kMaxAmplification (points
+    // close together, far from t: a root finder's last brackets).
+    std::array<double, kExtrapolationPoints> weights{};
+    for (int count = last_.count; count > 0; --count) {
+      double amplification = 0;
+      for (int j = 0; j < count; ++j) {
+        weights[j] = 1;
+        for (int k = 0; k < count; ++k)
+          if (k != j) weights[j] *= (t - last_.t[k]) / (last_.t[j] - last_.t[k]);
+        amplification += std::abs(weights[j]);
+      }
+      if (amplification <= kMaxAmplification) break;
+      weights.fill(0);
+    }
+    shifted_start_ = x_polynomial;
+    for (int j = 0; j < last_.count; ++j)
+      if (weights[j] != 0) shifted_start_ += weights[j] * last_.deviation[j];
     start = &shifted_start_;
   }
   std::optional<Vector> x = solve_from(*start, t, x_polynomial, q_polynomial, q_derivative, p, c);
-  if (x) {
-    // Assigned in place: the vectors keep their storage from row to row.
+  const bool known = std::find(last_.t.begin(), last_.t.begin() + last_.count, t) != last_.t.begin() + last_.count;
+  if (x && !known) {
+    // Rotated, not reallocated: the vectors keep their storage from row to row.
+    std::rotate(last_.deviation.rbegin(), last_.deviation.rbegin() + 1, last_.deviation.rend());
+    std::rotate(last_.t.rbegin(), last_.t.rbegin() + 1, last_.t.rend());
     last_.step = step;
-    last_.x = *x;
-    last_.x_polynomial = x_polynomial;
+    last_.count = std::min(last_.count + 1, kExtrapolationPoints);
+    last_.t[0] = t;
+    last_.deviation[0] = *x - x_polynomial;
   }
   return x;
 }

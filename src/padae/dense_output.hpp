@@ -16,6 +16,7 @@
 // corrector's.
 #pragma once
 
+#include <array>
 #include <optional>
 
 #include "padae/integrator.hpp"
@@ -31,9 +32,9 @@ class DenseOutput {
 
   // x at t inside step number `step` (taken in mode p), for the c above; S gives x_polynomial
   // (the value of auxiliary unknowns), q_polynomial and q_derivative. Newton starts from
-  // x_guess if given, else from the last solution inside the same step moved as S moved since
-  // (S's own error changes little from one row to the next: a floating node's common mode can
-  // be volts off on S), else from S. Empty where Newton fails.
+  // x_guess if given, else from S plus the solution's distance from S extrapolated from the
+  // last solutions inside the same step (that distance is smooth in t, and can be volts on a
+  // floating node's common mode), else from S. Empty where Newton fails.
   std::optional<Vector> solve(long step, double t, const Vector* x_guess, const Vector& x_polynomial,
                               const Vector& q_polynomial, const Vector& q_derivative,
                               const Predicates& p, double c);
@@ -53,9 +54,13 @@ class DenseOutput {
   const Options& options_;
   const Vector& absolute_tolerance_;
   Vector residual_, delta_, inverse_weight_, shifted_start_;
-  struct Solution {
+  // The last solutions inside step number `step`, newest first: their distances from S.
+  static constexpr int kExtrapolationPoints = 3;
+  struct Solutions {
     long step = -1;
-    Vector x, x_polynomial;
+    int count = 0;
+    std::array<double, kExtrapolationPoints> t{};
+    std::array<Vector, kExtrapolationPoints> deviation;
   } last_;
 };
 

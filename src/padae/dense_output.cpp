@@ -45,7 +45,8 @@ std::optional<Vector> DenseOutput::solve(long step, double t, const Vector* x_gu
     // many as it does not amplify their Newton error by more than kMaxAmplification (points
     // close together, far from t: a root finder's last brackets).
     std::array<double, kExtrapolationPoints> weights{};
-    for (int count = last_.count; count > 0; --count) {
+    int count = last_.count;
+    for (;; --count) {  // one point: weight 1
       double amplification = 0;
       for (int j = 0; j < count; ++j) {
         weights[j] = 1;
@@ -54,11 +55,9 @@ std::optional<Vector> DenseOutput::solve(long step, double t, const Vector* x_gu
         amplification += std::abs(weights[j]);
       }
       if (amplification <= kMaxAmplification) break;
-      weights.fill(0);
     }
     shifted_start_ = x_polynomial;
-    for (int j = 0; j < last_.count; ++j)
-      if (weights[j] != 0) shifted_start_ += weights[j] * last_.deviation[j];
+    for (int j = 0; j < count; ++j) shifted_start_ += weights[j] * last_.deviation[j];
     start = &shifted_start_;
   }
   std::optional<Vector> x = solve_from(*start, t, x_polynomial, q_polynomial, q_derivative, p, c);

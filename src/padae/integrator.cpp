@@ -694,6 +694,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
   update_weights();
   int error_test_failures = 0, newton_failures = 0;
   std::array<RejectedAttempt, kMaxErrorTestFailures> rejected;  // the first error_test_failures
+  int blamed = -1;  // the worst unknown of the last rejected attempt: what shrinks the step
   double error = 0, error_k = 0, error_k_minus_1 = 0;
   int order_new = order;
   bool ends_at_target = false;
@@ -706,9 +707,10 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     ends_at_target = t + h >= target || t + 1.0001 * h >= target;
     if (ends_at_target) h = target - t;
     if (h < minimum_step() && !ends_at_target) {
-      int worst = -1;
-      weighted_max_norm(correction_q, inverse_weight_q, &worst);
-      return fail(t, "step size " + format_number(h, 17) + " s fell below the minimum (round-off) at t = " + format_number(t, 17), worst);
+      // Without a rejection here the accepted steps' error estimates shrank it.
+      if (blamed < 0) weighted_max_norm(correction_q, inverse_weight_q, &blamed);
+      return fail(t, "step size " + format_number(h, 17) + " s fell below the minimum step (" + format_number(minimum_step(), 3) +
+                         " s) at t = " + format_number(t, 17), blamed);
     }
     rescale_first_step();
     set_coefficients();
@@ -729,16 +731,15 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       restore();
       if (correction == NewtonOutcome::outside_domain) ++statistics.rejected_domain;
       else ++statistics.rejected_newton;
+      weighted_max_norm(delta, inverse_weight_x, &blamed);
+      if (correction == NewtonOutcome::singular) blamed = newton.singular_column();
       if (++newton_failures >= kMaxNewtonFailures || h <= minimum_step()) {
-        int worst = -1;
-        weighted_max_norm(delta, inverse_weight_x, &worst);
         std::string why = correction == NewtonOutcome::singular
                               ? "the Newton matrix is singular (column " + std::to_string(newton.singular_column()) + ")"
                           : correction == NewtonOutcome::outside_domain
                               ? "the model cannot be evaluated (outside its domain) however small the step"
                               : "Newton's method does not converge however small the step";
-        if (correction == NewtonOutcome::singular) worst = newton.singular_column();
-        return fail(t, why + " at t = " + format_number(t, 17), worst);
+        return fail(t, why + " at t = " + format_number(t, 17), blamed);
       }
       h *= 0.25;
       have_matrix = have_matrix && correction != NewtonOutcome::singular;
@@ -749,10 +750,9 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       restore();
       ++statistics.rejected_error_test;
       rejected[error_test_failures++] = {order, h, error};
+      weighted_max_norm(correction_q, inverse_weight_q, &blamed);
       if (error_test_failures >= kMaxErrorTestFailures) {
-        int worst = -1;
-        weighted_max_norm(correction_q, inverse_weight_q, &worst);
-        return fail(t, "the error test failed repeatedly at t = " + format_number(t, 17), worst,
+        return fail(t, "the error test failed repeatedly at t = " + format_number(t, 17), blamed,
                     unfalling_error(std::span(rejected.data(), error_test_failures)));
       }
       double error_new = order_new == order ? error_k : error_k_minus_1;

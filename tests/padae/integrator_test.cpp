@@ -492,6 +492,39 @@ TEST(Integrator, StopsWhereAnAlgebraicBranchEndsWhereverTheStepsFall) {
   }
 }
 
+// Fold beside a charge that decays (x' = -1000 x, dense steps): the run stops at the fold,
+// whichever limit stops it (Newton's failures or the step minimum), and names the fold's unknown,
+// not the one the error test last weighed.
+class FoldBesideDecay : public SemiExplicitSystem {
+ public:
+  FoldBesideDecay() : SemiExplicitSystem({D, A}, {{0, 0}, {1, 1}}) {}
+  EvalStatus equations(double t, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = -1000 * z[0];
+    const double y = z[1];
+    out[1] = y * y * y - 3 * y + 1e-9 * y - 3000 * t;
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Integrator, StopAtAFoldNamesTheFoldsUnknown) {
+  const double fold = (2 + 1e-9) / 3000;
+  for (double min_step : {0.0, 1e-12, 1e-10, 1e-9, 1e-8}) {
+    FoldBesideDecay model;
+    Options options;
+    options.rtol = 1e-3;
+    options.atol = 1e-6;
+    options.time_scale = 1e-3;
+    options.min_step = min_step;
+    Integrator integrator(model, options);
+    Vector start(2);
+    start << 1, 0;
+    ASSERT_TRUE(integrator.initialize(0.0, start)) << integrator.failure().reason;
+    EXPECT_FALSE(run_until(integrator, 1e-3)) << "min_step " << min_step;
+    EXPECT_NEAR(integrator.time(), fold, 1e-3 * fold) << "min_step " << min_step;
+    EXPECT_EQ(integrator.failure().unknown, 1) << "min_step " << min_step << ": " << integrator.failure().reason;
+  }
+}
+
 // A track-and-hold: x' = g(t) (t - x), the conductance g = G / (1 + e^((t - 1) / TAU)) falling
 // from G = 1e6 to nothing within a few TAU = 1e-5 of t = 1, inside one step. Before, x tracks
 // t within 2 / G (where g >= G / 2, e' = 1 - g e with e = t - x keeps e <= 2 / G); after, x

@@ -209,6 +209,12 @@ struct Integrator::Impl {
   const int predicate_count;
   Statistics statistics;
   Vector absolute_tolerance;
+  // absolute_tolerance raised to the round-off of each unknown's magnitude (kEstimateRoundoff of
+  // its peak so far): no Newton iteration (steps, events, rows) asks for less than double
+  // precision resolves. An absolute tolerance below it (vntol 1e-15 V on a 12 V bridge) failed
+  // the steps' Newton near a node's zero crossing until the step fell below its minimum, and
+  // the rows' Newton there, whose rows then fell back to the polynomial. Updated with the weights.
+  Vector resolvable_tolerance;
   NewtonMatrix newton;
   Reinitializer reinitializer;
   // Solutions inside a step, made on first use: one locates events (its work counts as the
@@ -323,8 +329,9 @@ Integrator::Impl::Impl(System& system_in, Options options_in)
                                                return system_in.absolute_tolerance(
                                                    static_cast<int>(i), options_in.atol);
                                              })),
+      resolvable_tolerance(absolute_tolerance),
       newton(system_in, statistics, absolute_tolerance / options.rtol),
-      reinitializer(system_in, newton, statistics, options, absolute_tolerance) {
+      reinitializer(system_in, newton, statistics, options, resolvable_tolerance) {
   every_unknown.resize(n);
   peak_magnitude.setZero(n);
   std::iota(every_unknown.begin(), every_unknown.end(), 0);
@@ -371,8 +378,9 @@ double Integrator::Impl::minimum_step() const {
 }
 
 void Integrator::Impl::update_weights() {
-  inverse_weight_x = (options.rtol * x.cwiseAbs() + absolute_tolerance).cwiseInverse();
   peak_magnitude = peak_magnitude.cwiseMax(x.cwiseAbs());
+  resolvable_tolerance = absolute_tolerance + kEstimateRoundoff * peak_magnitude;
+  inverse_weight_x = (options.rtol * x.cwiseAbs() + resolvable_tolerance).cwiseInverse();
   // The error is tested on the dynamic rows' q, in the units of x: a row's tolerance is the
   // charge its unknowns' tolerances represent (for q_i = x_i, IDA's rtol |x_i| + atol_i).
   error_scale = x.cwiseAbs().cwiseMax(options.peak_floor * peak_magnitude);
@@ -825,7 +833,7 @@ bool Integrator::Impl::crossed(const Vector& guards) const {
 }
 
 DenseOutput& Integrator::Impl::locator() {
-  if (!location_solver) location_solver = std::make_unique<DenseOutput>(system, statistics, options, absolute_tolerance);
+  if (!location_solver) location_solver = std::make_unique<DenseOutput>(system, statistics, options, resolvable_tolerance);
   return *location_solver;
 }
 
@@ -1060,7 +1068,7 @@ bool Integrator::Impl::charges_determine(std::span<const int> unknowns) {
 }
 
 DenseOutput& Integrator::Impl::writer() {
-  if (!output_solver) output_solver = std::make_unique<DenseOutput>(system, output_statistics, options, absolute_tolerance);
+  if (!output_solver) output_solver = std::make_unique<DenseOutput>(system, output_statistics, options, resolvable_tolerance);
   return *output_solver;
 }
 

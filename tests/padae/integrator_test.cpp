@@ -168,6 +168,39 @@ TEST(Integrator, RtolBelowDoublePrecisionIsRaisedToTheSmallestThatResolves) {
   EXPECT_LT(worst, 1e-13);
 }
 
+// x' = -x beside 0 = (y + 10)^2 - (g + 10)^2, g = 10 e^(-10 t): the root y = g falls from 10 to
+// nothing, and the squares round to ulps of 100, so Newton resolves y only to about 1e-15, which
+// an absolute tolerance of 1e-17 asks for once y is small. Newton's tolerance is floored at that
+// round-off of the unknown's magnitude (its peak): the run goes on, y on its root within rtol of
+// its peak.
+class RoundedRoot : public SemiExplicitSystem {
+ public:
+  RoundedRoot() : SemiExplicitSystem({D, A}, {{0, 0}, {1, 1}}) {}
+  static double root(double t) { return 10 * std::exp(-10 * t); }
+  EvalStatus equations(double t, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = -z[0];
+    const double shifted = root(t) + 10;
+    out[1] = (z[1] + 10) * (z[1] + 10) - shifted * shifted;
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Integrator, NewtonsToleranceStopsAtTheRoundOffOfTheUnknownsMagnitude) {
+  RoundedRoot model;
+  Options options;
+  options.rtol = 1e-12;
+  options.atol = 1e-17;
+  Integrator integrator(model, options);
+  Vector start(2);
+  start << 1, RoundedRoot::root(0);
+  ASSERT_TRUE(integrator.initialize(0.0, start)) << integrator.failure().reason;
+  double worst = 0;
+  EXPECT_TRUE(run_until(integrator, 10.0, [&](const StepOutcome&) {
+    worst = std::max(worst, std::abs(integrator.state()[1] - RoundedRoot::root(integrator.time())));
+  })) << integrator.failure().reason;
+  EXPECT_LT(worst, options.rtol * RoundedRoot::root(0));
+}
+
 // The trapezoidal rule is A-stable without damping: x'' = -x keeps its amplitude over 1,000
 // periods at a loose tolerance, where BDF (its L-stable low orders) visibly damps it.
 TEST(Integrator, TrapezoidalKeepsAnUndampedOscillationsAmplitude) {

@@ -834,6 +834,50 @@ def case_tolerance_below_roundoff(c):
                                             tag="rtol%g_atol%g" % (rtol, atol)))
 
 
+def case_tolerance_below_roundoff_junctions(c):
+    r = c.run(args=("--grid",), tag="default")
+    c.expect(r.returncode == 0, f"exit 0 ({describe_status(r.returncode)})", key=True)
+    c.expect(bool(r.rows) and r.rows[-1][0] >= 0.06 * (1 - 1e-12),
+             f"rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s", key=True)
+    resolvable = c.run(args=("--atol", "1e-12", "--grid"), tag="vntol1e-12")
+    c.expect(resolvable.returncode == 0, f"vntol 1e-12: exit 0 ({describe_status(resolvable.returncode)})")
+    if r.returncode == 0 and resolvable.returncode == 0:
+        # Compared on the rows at the same instants (the TSTEP grid: both runs write it).
+        for probe in ("v(p)", "v(n)"):
+            k, j = r.header.index(probe), resolvable.header.index(probe)
+            other = {row[0]: row[j] for row in resolvable.rows}
+            pairs = [(row[0], abs(row[k] - other[row[0]])) for row in r.rows if row[0] in other]
+            at, worst = max(pairs, key=lambda p: p[1]) if pairs else (None, math.inf)
+            c.expect(len(pairs) >= 6000 and worst <= 1e-9,
+                     f"{probe} agrees with the vntol 1e-12 run to {g(worst)} V at {len(pairs)} common instants "
+                     f"(at {g(at)} s; <= 1e-9 V)", key=True)
+    c.stats_figure(r)
+
+
+def boost_operating_point_out():
+    """v(out) of tolerance_below_roundoff_operating_point at its operating point: D1 (IS 1e-9,
+    N 1.5, RS 5 mohm, GMIN 1e-12 across the junction) from 5 V into Rload 20 ohm."""
+    vt = 1.5 * 1.38064852e-23 * 300.15 / 1.6021766208e-19
+
+    def diode(vj):
+        return 1e-9 * math.expm1(vj / vt) + 1e-12 * vj
+
+    vj = bisect(lambda v: diode(v) - (5 - v - 5e-3 * diode(v)) / 20, 0.0, 1.0)
+    return 5 - vj - 5e-3 * diode(vj)
+
+
+def case_tolerance_below_roundoff_operating_point(c):
+    r = c.run(tag="default")
+    c.expect(r.returncode == 0, f"exit 0 ({describe_status(r.returncode)})", key=True)
+    c.expect(bool(r.rows) and r.rows[-1][0] >= 20e-6 * (1 - 1e-12),
+             f"rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s")
+    if r.rows:
+        exact = boost_operating_point_out()
+        error = abs(r.rows[0][r.header.index("v(out)")] - exact)
+        c.expect(error <= 1e-12, f"first row: v(out) {exact:.15g} V within {g(error)} V (<= 1e-12 V)", key=True)
+    c.stats_figure(r)
+
+
 def case_tolerance_below_double_precision(c):
     # A minute bounds the run: before padae::kSmallestRtol, the first 1.7e-5 s took 20 s.
     r = c.run(tag="default", timeout=60, quiet=False)
@@ -978,6 +1022,8 @@ NUMERIC_CASES = [
     ("faults", "log_negative_off_path", case_log_negative_off_path),
     ("faults", "newton_divergence", case_newton_divergence),
     ("faults", "tolerance_below_roundoff", case_tolerance_below_roundoff),
+    ("faults", "tolerance_below_roundoff_junctions", case_tolerance_below_roundoff_junctions),
+    ("faults", "tolerance_below_roundoff_operating_point", case_tolerance_below_roundoff_operating_point),
     ("faults", "tolerance_below_double_precision", case_tolerance_below_double_precision),
     ("faults", "killed_sigterm", case_killed_sigterm),
     ("faults", "killed_sigkill", case_killed_sigkill),

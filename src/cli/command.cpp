@@ -230,11 +230,23 @@ void print_statistics(const padae::Statistics& s, const padae::Statistics& outpu
              "{{\"steps\": {}, \"rejected\": {}, \"rejected_error_test\": {}, \"rejected_newton\": {}, "
              "\"rejected_domain\": {}, \"newton_iterations\": {}, \"jacobians\": {}, "
              "\"lu_factorizations\": {}, \"events\": {}, \"time_events\": {}, \"jumps\": {}, "
-             "\"output_newton_iterations\": {}, \"output_lu_factorizations\": {}, \"unknowns\": {}, "
-             "\"t_end\": {}, \"wall_s\": {:.6f}}}\n",
+             "\"output_newton_iterations\": {}, \"output_lu_factorizations\": {}, \"unsolved_points\": {}, "
+             "\"output_unsolved_points\": {}, \"unknowns\": {}, \"t_end\": {}, \"wall_s\": {:.6f}}}\n",
              s.steps, s.rejected_error_test + s.rejected_newton + s.rejected_domain, s.rejected_error_test,
              s.rejected_newton, s.rejected_domain, s.newton_iterations, s.jacobians, s.lu_factorizations, s.events,
-             s.time_events, s.jumps, output.newton_iterations, output.lu_factorizations, unknowns, t_end, wall);
+             s.time_events, s.jumps, output.newton_iterations, output.lu_factorizations, s.unsolved_points,
+             output.unsolved_points, unknowns, t_end, wall);
+}
+
+// Points inside steps written or used from the polynomial (Statistics::unsolved_points): the
+// waveform may be off there by more than the tolerance, which the user must know.
+void warn_unsolved_points(const padae::Statistics& s, const padae::Statistics& output) {
+  if (s.unsolved_points == 0 && output.unsolved_points == 0) return;
+  fmt::print(stderr,
+             "padsim: warning: Newton found no solution at {} output row(s) and {} event-location point(s) "
+             "inside steps; the steps' interpolating polynomial stands in there, and its algebraic unknowns "
+             "may be off by more than the tolerance\n",
+             output.unsolved_points, s.unsolved_points);
 }
 
 
@@ -388,6 +400,7 @@ class Session {
       }
     }
     if (!temporary_csv_.empty()) std::filesystem::remove(temporary_csv_);
+    if (!options_.quiet && integrator_) warn_unsolved_points(integrator_->statistics(), integrator_->output_statistics());
     if (options_.stats && integrator_)
       print_statistics(integrator_->statistics(), integrator_->output_statistics(), model_->size(),
                        integrator_->time(), wall_seconds());

@@ -157,8 +157,10 @@ struct Integrator::Impl {
   void interpolate(double t_at, std::span<const int> unknowns, Vector& out) const;
   double first_step_estimate(double t_at, const Vector& x_at);
   // x at t_at inside the last step as a step of its order from its start would reach it
-  // (dense_output.hpp); the polynomial's x where that cannot be solved.
-  Vector step_solution(DenseOutput& solver, double t_at) const;
+  // (dense_output.hpp); empty where Newton finds no solution.
+  std::optional<Vector> step_solution(DenseOutput& solver, double t_at) const;
+  // step_solution(), or the polynomial's x counted in statistics.unsolved_points.
+  Vector solution_or_polynomial(DenseOutput& solver, Statistics& counted_in, double t_at) const;
   // Whether the last step's polynomial is as good as its solution for these unknowns. The error
   // test controls the charges, and so the unknowns that are functions of one charge each. The
   // polynomial of any other unknown (an algebraic one, or one in a hidden algebraic direction
@@ -1047,8 +1049,10 @@ bool Integrator::Impl::polynomial_serves(std::span<const int> unknowns) {
   if (midpoint_check.step != step.number) {
     const double midpoint = step.anchor - step.psi[0] / 2;
     midpoint_check.step = step.number;
-    midpoint_check.miss =
-        (step_solution(writer(), midpoint) - interpolate(midpoint)).cwiseAbs().cwiseProduct(inverse_weight_x);
+    // Where the midpoint has no solution, nothing certifies the polynomial: the rows are solved.
+    const auto solved = step_solution(writer(), midpoint);
+    midpoint_check.miss = solved ? Vector((*solved - interpolate(midpoint)).cwiseAbs().cwiseProduct(inverse_weight_x))
+                                 : Vector::Constant(n, std::numeric_limits<double>::infinity());
   }
   for (int i : unknowns)
     if (midpoint_check.miss[i] > 1) return false;
@@ -1078,7 +1082,7 @@ Vector Integrator::Impl::located_solution(double t_at) {
     located.clear();
     located_step = last_step().number;
   }
-  located.push_back({t_at, step_solution(locator(), t_at)});
+  located.push_back({t_at, solution_or_polynomial(locator(), statistics, t_at)});
   return located.back().x;
 }
 
@@ -1089,7 +1093,13 @@ const Vector* Integrator::Impl::remembered_solution(double t_at) const {
   return nullptr;
 }
 
-Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
+Vector Integrator::Impl::solution_or_polynomial(DenseOutput& solver, Statistics& counted_in, double t_at) const {
+  if (auto solved = step_solution(solver, t_at)) return std::move(*solved);
+  ++counted_in.unsolved_points;
+  return interpolate(t_at);
+}
+
+std::optional<Vector> Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
   const StepView step = last_step();
   // The points S passes through before the step's end are t_j = end - psi_j, j < order.
   auto c_at = [&](double t_of) {
@@ -1117,7 +1127,7 @@ Vector Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
   Vector x = interpolate(step_start);
   for (int halvings = kContinuationHalvings; halvings >= 0; --halvings) {
     auto solved = solve_at(step_start + std::ldexp(t_at - step_start, -halvings), &x);
-    if (!solved) return interpolate(t_at);
+    if (!solved) return std::nullopt;
     x = std::move(*solved);
   }
   return x;
@@ -1228,7 +1238,7 @@ const Vector& Integrator::dense_output(double t_at, std::span<const int> unknown
     s.output_row.resize(s.n);
     s.interpolate(t_at, unknowns, s.output_row);
   } else {
-    s.output_row = s.step_solution(s.writer(), t_at);
+    s.output_row = s.solution_or_polynomial(s.writer(), s.output_statistics, t_at);
   }
   return s.output_row;
 }

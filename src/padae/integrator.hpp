@@ -80,6 +80,10 @@ struct Statistics {
   long events = 0;                 // state events (predicate flips) handled
   long time_events = 0;            // source corners a step ended on (passed ones not counted)
   long jumps = 0;                  // events at which the state jumped
+  // Points inside a step (event location, output rows) where Newton found no solution: the
+  // interpolating polynomial's x stands in, its algebraic unknowns possibly off by more than
+  // the tolerance.
+  long unsolved_points = 0;
 };
 
 // A predicate change at an event.

@@ -472,6 +472,40 @@ TEST(Integrator, DenseOutputSolvesWhereNewtonFromThePolynomialFails) {
   EXPECT_LT(worst, 1e-6);
 }
 
+// x' = -x beside 0 = y^3 + y - x, a model that cannot be evaluated at t = blind (set after the
+// steps): a row there has no solution. Its value is the polynomial's, and it is counted, so that
+// the user is told; a row elsewhere in the same step is solved.
+class BlindInstant : public SemiExplicitSystem {
+ public:
+  BlindInstant() : SemiExplicitSystem({D, A}) {}
+  double blind = -1;
+  EvalStatus equations(double t, const Vector& z, const Predicates&, Vector& out) override {
+    if (t == blind) return EvalStatus::outside_domain;
+    out[0] = -z[0];
+    out[1] = z[1] * z[1] * z[1] + z[1] - z[0];
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Integrator, DenseOutputWithoutASolutionIsThePolynomialAndIsCounted) {
+  BlindInstant model;
+  Options options;
+  options.rtol = 1e-6;
+  options.atol = 1e-9;
+  Integrator integrator(model, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector{{1.0, 0.6823278038280193}})) << integrator.failure().reason;
+  while (integrator.time() < 0.5) ASSERT_NE(integrator.step(1.0).kind, StepKind::failed) << integrator.failure().reason;
+  const double midpoint = integrator.time() - 0.5 * integrator.step_size();
+  model.blind = midpoint;  // where the step's polynomial is checked, too: nothing certifies it
+  EXPECT_EQ(integrator.dense_output(midpoint), integrator.interpolate(midpoint));
+  EXPECT_EQ(integrator.output_statistics().unsolved_points, 1);
+  const double quarter = integrator.time() - 0.25 * integrator.step_size();
+  const Vector row = integrator.dense_output(quarter);
+  EXPECT_LT(std::abs(row[1] * row[1] * row[1] + row[1] - row[0]), 1e-7);
+  EXPECT_EQ(integrator.output_statistics().unsolved_points, 1);
+  EXPECT_EQ(integrator.statistics().unsolved_points, 0);
+}
+
 // The first step from a consistent state is the trapezoidal rule (local error h^3 x''' / 12), not
 // backward Euler (h^2 x'' / 2): on x' = -x a first step of 1e-3 leaves 8e-11, where backward
 // Euler would leave 5e-7.

@@ -34,7 +34,11 @@ CASES_DIR = HERE / "cases"
 BAD_DIR = HERE / "invalid"  # the netlist corpus test skips directories named invalid
 
 # Cases padsim fails today, with the reason (shown in CTest as disabled and in the report).
-KNOWN_FAILURES = {}
+KNOWN_FAILURES = {
+    "source_capacitor_loop_tight": "the re-initialization's settling steps cannot resolve a source current "
+                                   "through a loop of capacitors (index 2) at rtol 1e-6: Newton cycles at "
+                                   "round-off and the run stops at 5 us (found in session 24)",
+}
 
 BAD_INPUT_SECONDS = 10  # a refusal takes milliseconds; 10 s leaves room for the sanitizer build
 SANITIZER_MARKS = ("AddressSanitizer", "LeakSanitizer", "UndefinedBehaviorSanitizer", "runtime error:")
@@ -702,6 +706,25 @@ def case_simultaneous_100_switches(c):
     c.stats_figure(r)
 
 
+def case_source_capacitor_loop_tight(c):
+    reference = c.run(tag="default")
+    c.expect(reference.returncode == 0, f"default tolerances: exit 0 ({describe_status(reference.returncode)})")
+    r = c.run(args=("--rtol", "1e-6"), tag="rtol1e-6")
+    c.expect(r.returncode == 0, f"rtol 1e-6: exit 0 ({describe_status(r.returncode)}) {r.error_text()}", key=True)
+    c.expect(bool(r.rows) and r.rows[-1][0] >= 100e-6 * (1 - 1e-12),
+             f"rtol 1e-6: rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s")
+    if r.returncode == 0 and reference.returncode == 0:
+        k, j = r.header.index("v(m)"), reference.header.index("v(m)")
+        other = {row[0]: row[j] for row in reference.rows}
+        values = [row[j] for row in reference.rows]
+        span = max(values) - min(values)
+        pairs = [(row[0], abs(row[k] - other[row[0]])) for row in r.rows if row[0] in other]
+        at, worst = max(pairs, key=lambda p: p[1]) if pairs else (None, math.inf)
+        c.expect(worst <= 1e-2 * span, f"v(m) within {g(worst)} V of the default run at {len(pairs)} common instants "
+                 f"(at {g(at)} s; <= 1e-2 x its range {g(span)} V)", key=True)
+    c.stats_figure(r)
+
+
 def case_first_step_events(c):
     r = c.run(args=["--probe", "v(a),v(c2),v(s1out),v(ctl2)"], tag="default", events=True)
     if not c.expect(r.returncode == 0, f"the run succeeds ({describe_status(r.returncode)})"):
@@ -1016,6 +1039,7 @@ NUMERIC_CASES = [
     ("events", "zeno_charge_sharing", case_zeno_charge_sharing),
     ("events", "flip_back_after_jump", case_flip_back_after_jump),
     ("events", "simultaneous_100_switches", case_simultaneous_100_switches),
+    ("events", "source_capacitor_loop_tight", case_source_capacitor_loop_tight),
     ("events", "first_step_events", case_first_step_events),
     ("events", "events_closer_than_min_step", case_events_closer_than_min_step),
     ("events", "source_jump_fast_rc", case_source_jump_fast_rc),

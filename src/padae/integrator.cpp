@@ -185,8 +185,8 @@ struct Integrator::Impl {
     bool corner_inside;   // the step passed a source corner
   };
   StepView last_step() const;
-  // step_solution() for the guards (events, passed corners), remembered for the output rows at
-  // the same instants.
+  // solution_or_polynomial() for the guards (events, passed corners), remembered for the output
+  // rows at the same instants.
   Vector located_solution(double t_at);
   const Vector* remembered_solution(double t_at) const;
 
@@ -212,10 +212,9 @@ struct Integrator::Impl {
   Statistics statistics;
   Vector absolute_tolerance;
   // absolute_tolerance raised to the round-off of each unknown's magnitude (kEstimateRoundoff of
-  // its peak so far): no Newton iteration (steps, events, rows) asks for less than double
-  // precision resolves. An absolute tolerance below it (vntol 1e-15 V on a 12 V bridge) failed
-  // the steps' Newton near a node's zero crossing until the step fell below its minimum, and
-  // the rows' Newton there, whose rows then fell back to the polynomial. Updated with the weights.
+  // its peak so far), updated with the weights: no Newton iteration (steps, events, rows) asks
+  // for less than double precision resolves (vntol 1e-15 V on a 12 V bridge stalled Newton near
+  // a node's zero crossing).
   Vector resolvable_tolerance;
   NewtonMatrix newton;
   Reinitializer reinitializer;

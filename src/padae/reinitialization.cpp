@@ -81,9 +81,7 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     double rate = norm / previous_norm;
     if (fraction == 1) {
       if (norm <= kConvergedNorm) return true;
-      // Within the tolerance and no longer contracting with a fresh matrix: the round-off floor
-      // of an ill-conditioned matrix (tight tolerances, floating capacitors), not a failure.
-      if (refactor && norm <= 1 && rate >= 0.5) return true;
+      if (refactor && stalled_at_roundoff(norm, previous_norm)) return true;  // floating capacitors
     }
     refactor = fraction < 1 || rate > kRefactorRate;
     // After a partial step the iteration starts afresh.

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "padae/newton_matrix.hpp"
+#include "padae/norms.hpp"
 
 namespace padae {
 
@@ -44,9 +45,8 @@ class SteadyStateSolver {
       }
       if (!std::isfinite(norm)) return false;
       if (fraction == 1 && norm <= kConvergedNorm) return true;
-      // Within the tolerance and no longer contracting: the round-off floor of a tolerance
-      // tighter than double precision resolves (boost.cir at reltol 1e-14), not a failure.
-      if (fraction == 1 && norm <= 1 && norm >= 0.5 * previous_norm) return true;
+      // Each iteration's matrix is fresh (boost.cir at reltol 1e-14 stalled so).
+      if (fraction == 1 && stalled_at_roundoff(norm, previous_norm)) return true;
       previous_norm = fraction == 1 ? norm : std::numeric_limits<double>::infinity();
     }
     return false;

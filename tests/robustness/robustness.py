@@ -721,8 +721,7 @@ def case_source_capacitor_loop_tight(c):
     for rtol, r in runs.items():
         c.expect(r.returncode == 0, f"rtol {g(rtol)}: exit 0 ({describe_status(r.returncode)}) {r.error_text()}",
                  key=True)
-        c.expect(bool(r.rows) and r.rows[-1][0] >= 100e-6 * (1 - 1e-12),
-                 f"rtol {g(rtol)}: rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s")
+        expect_rows_to_tstop(c, r, 100e-6, label=f"rtol {g(rtol)}: ")
     if all(r.returncode == 0 for r in runs.values()):
         at, worst, count = difference_at_common_instants(runs[1e-6], runs[1e-9], "v(m)")
         c.expect(count >= 10000 and worst <= 10 * 1e-6 * 380,
@@ -840,11 +839,16 @@ def relaxation_cap(t, rc=1e-3):
     return target + (start - target) * math.exp(-(t - t1 - k * half) / rc)
 
 
+def expect_rows_to_tstop(c, r, tstop, label="", key=False):
+    """The run's rows reach tstop (within round-off of it)."""
+    c.expect(bool(r.rows) and r.rows[-1][0] >= tstop * (1 - 1e-12),
+             f"{label}rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s", key=key)
+
+
 def expect_relaxation_to_tstop(c, r):
     """The relaxation oscillator's run (tstop 10 ms) ended well and follows its closed form."""
     c.expect(r.returncode == 0, f"exit 0 ({describe_status(r.returncode)})", key=True)
-    c.expect(bool(r.rows) and r.rows[-1][0] >= 0.01 * (1 - 1e-12),
-             f"rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s", key=True)
+    expect_rows_to_tstop(c, r, 0.01, key=True)
     if r.rows:
         # 2e-9 of the 5 V swing: a run at reltol 1e-6 is 1e-6 V off; tolerance_below_roundoff
         # 3.6e-10 V, tolerance_below_double_precision 1.4e-12 V (measured).
@@ -866,8 +870,7 @@ def case_tolerance_below_roundoff(c):
 def case_tolerance_below_roundoff_junctions(c):
     r = c.run(args=("--grid",), tag="default")
     c.expect(r.returncode == 0, f"exit 0 ({describe_status(r.returncode)})", key=True)
-    c.expect(bool(r.rows) and r.rows[-1][0] >= 0.06 * (1 - 1e-12),
-             f"rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s", key=True)
+    expect_rows_to_tstop(c, r, 0.06, key=True)
     resolvable = c.run(args=("--atol", "1e-12", "--grid"), tag="vntol1e-12")
     c.expect(resolvable.returncode == 0, f"vntol 1e-12: exit 0 ({describe_status(resolvable.returncode)})")
     if r.returncode == 0 and resolvable.returncode == 0:
@@ -894,8 +897,7 @@ def boost_operating_point_out():
 def case_tolerance_below_roundoff_operating_point(c):
     r = c.run(tag="default")
     c.expect(r.returncode == 0, f"exit 0 ({describe_status(r.returncode)})", key=True)
-    c.expect(bool(r.rows) and r.rows[-1][0] >= 20e-6 * (1 - 1e-12),
-             f"rows to tstop: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s")
+    expect_rows_to_tstop(c, r, 20e-6)
     if r.rows:
         exact = boost_operating_point_out()
         error = abs(r.rows[0][r.header.index("v(out)")] - exact)

@@ -169,10 +169,10 @@ TEST(Integrator, RtolBelowDoublePrecisionIsRaisedToTheSmallestThatResolves) {
 }
 
 // x' = -x beside 0 = (y + 10)^2 - (g + 10)^2, g = 10 e^(-10 t): the root y = g falls from 10 to
-// nothing, and the squares round to ulps of 100, so Newton resolves y only to about 1e-15, which
-// an absolute tolerance of 1e-17 asks for once y is small. Newton's tolerance is floored at that
-// round-off of the unknown's magnitude (its peak): the run goes on, y on its root within rtol of
-// its peak.
+// nothing, and the squares round to ulps of 100, while the absolute tolerance is 1e-17. The run
+// must go on, y on its root within rtol of its peak. (Newton happens to land on exact roots of
+// the rounded squares here, with or without the round-off floor on its tolerance: the floor's
+// own test is the robustness case tolerance_below_roundoff_junctions.)
 class RoundedRoot : public SemiExplicitSystem {
  public:
   RoundedRoot() : SemiExplicitSystem({D, A}, {{0, 0}, {1, 1}}) {}
@@ -185,7 +185,7 @@ class RoundedRoot : public SemiExplicitSystem {
   }
 };
 
-TEST(Integrator, NewtonsToleranceStopsAtTheRoundOffOfTheUnknownsMagnitude) {
+TEST(Integrator, AbsoluteToleranceBelowRoundOffKeepsTheRunOnTheRoot) {
   RoundedRoot model;
   Options options;
   options.rtol = 1e-12;

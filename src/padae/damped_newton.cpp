@@ -27,6 +27,7 @@ NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const C
                            const Vector& inverse_weight, double tolerance, int max_iterations, Vector& x,
                            int branch_sign) {
   Vector residual, step, trial, simplified;
+  const Vector roundoff_terms = equation.q_derivative.cwiseAbs() + equation.c * equation.q_anchor.cwiseAbs();
   // The last correction taken; q and f are left evaluated at the solution. A solution where the
   // matrix's determinant has another sign than on the branch is across a fold from it, on
   // another branch: refused.
@@ -55,9 +56,11 @@ NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const C
       corrector_correction(newton, equation, trial, residual, simplified);
       simplified_norm = weighted_max_norm(simplified, inverse_weight);
       if (simplified_norm <= (1 - damping / 4) * norm) break;
-      // Within one tolerance unit and no longer shrinking: the round-off floor of a tight
-      // tolerance, not a failure.
-      if (damping == 1 && norm <= 1) return converge(step);
+      // No longer shrinking, within one tolerance unit or within what rounding makes of the
+      // correction (index 2: a source's current through capacitors, C/h per ulp of their
+      // voltages): the round-off floor, not a failure.
+      if (damping == 1 && (norm <= 1 || newton.within_roundoff(step, 1, inverse_weight, 1, x, roundoff_terms)))
+        return converge(step);
     }
     // The simplified correction is on the matrix at the last iterate, which can be far stiffer
     // than the one at the trial (a junction that has since turned off): however small, it does

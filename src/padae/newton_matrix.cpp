@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace padae {
@@ -218,6 +219,26 @@ NewtonMatrix::Outcome NewtonMatrix::factor_loaded() {
   }
   ++statistics_.lu_factorizations;
   return lu_.factor(matrix_) ? Outcome::ok : Outcome::singular;
+}
+
+bool NewtonMatrix::within_roundoff(const Vector& v, double tolerances, const Vector& inverse_weight,
+                                   double roundoffs, const Vector& x, const Vector& other_terms) const {
+  const auto& starts = pattern_.column_starts();
+  const auto& rows = pattern_.row_indices();
+  roundoff_ = other_terms.cwiseAbs();
+  for (int column = 0; column < pattern_.size(); ++column)
+    for (int k = starts[column]; k < starts[column + 1]; ++k) roundoff_[rows[k]] += std::abs(matrix_[k] * x[column]);
+  for (int row = 0; row < pattern_.size(); ++row) {
+    // Signs from the bits of a multiplicative hash: independent of the circuit's structure.
+    const bool negative = (static_cast<std::uint32_t>(row) * 2654435761u) & 0x8000u;
+    roundoff_[row] *= auxiliary_[row] ? 0.0 : (negative ? -1.0 : 1.0) * std::numeric_limits<double>::epsilon();
+  }
+  lu_.solve(roundoff_);
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    const double allowed = system_.kind(static_cast<int>(i)) == UnknownKind::algebraic ? roundoffs * std::abs(roundoff_[i]) : 0.0;
+    if (std::abs(v[i]) > tolerances / inverse_weight[i] + allowed) return false;
+  }
+  return true;
 }
 
 void NewtonMatrix::charge_scale(const Vector& scale, Vector& out) const {

@@ -46,6 +46,14 @@ class NewtonMatrix {
   EvalStatus charge_determined(double t, const Vector& x, const Predicates& p, std::vector<char>& out);
   // Zeroes the entries of v on algebraic rows (no dq/dx in the last factorization).
   void keep_dynamic_rows(Vector& v) const;
+  // Whether |v_i| <= tolerances / inverse_weight_i + roundoffs * r_i for every i, r what
+  // rounding alone makes of a Newton correction at x in the last factorization: the rounding of
+  // the residual's terms, eps (|J| |x| + |other_terms|) row by row (other_terms: what else the
+  // residual sums, c q_anchor and q'), with signs that do not cancel systematically, through
+  // J^-1. A correction within it is the residual's noise: x solves the equations to working
+  // precision.
+  bool within_roundoff(const Vector& v, double tolerances, const Vector& inverse_weight, double roundoffs,
+                       const Vector& x, const Vector& other_terms) const;
   int singular_column() const { return lu_.singular_column(); }
   int determinant_sign() const { return lu_.determinant_sign(); }
   bool is_auxiliary(int unknown) const { return auxiliary_[unknown]; }
@@ -74,6 +82,7 @@ class NewtonMatrix {
   std::vector<double> matrix_;
   std::vector<double> abs_dq_dx_;  // |dq/dx| of the last factorization
   mutable Vector row_scale_;       // scratch of drift()
+  mutable Vector roundoff_;        // scratch of within_roundoff()
   std::vector<char> auxiliary_;
   std::vector<int> auxiliary_list_;
   std::vector<int> diagonal_;      // value index of (i, i)

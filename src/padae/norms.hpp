@@ -8,9 +8,10 @@ namespace padae {
 
 double weighted_max_norm(const Vector& v, const Vector& inverse_weight, int* worst = nullptr);
 
-// A Newton correction within the tolerance (norm in tolerance units) that no longer contracts on
-// a fresh matrix: the round-off floor of the solves (tight tolerances, ill-conditioned matrices),
-// not a failure.
-inline bool stalled_at_roundoff(double norm, double previous_norm) { return norm <= 1 && norm >= 0.5 * previous_norm; }
+// A Newton correction (norm in tolerance units) that no longer contracts on a fresh matrix.
+inline bool stalled(double norm, double previous_norm) { return norm >= 0.5 * previous_norm; }
+// Stalled within the tolerance: the round-off floor of the solves (tight tolerances,
+// ill-conditioned matrices), not a failure.
+inline bool stalled_at_roundoff(double norm, double previous_norm) { return norm <= 1 && stalled(norm, previous_norm); }
 
 }  // namespace padae

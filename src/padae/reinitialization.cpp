@@ -82,6 +82,11 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     if (fraction == 1) {
       if (norm <= kConvergedNorm) return true;
       if (refactor && stalled_at_roundoff(norm, previous_norm)) return true;  // floating capacitors
+      // Beyond the tolerance, the stall can still be the rounding of the residual's terms: a
+      // source's current through a loop of capacitors (index 2) moves by C/h per ulp of their
+      // voltages, more than its tolerance in steps this short.
+      if (refactor && stalled(norm, previous_norm) && newton_.within_roundoff(delta, 1, inverse_weight, 1, x, cj * q_start))
+        return true;
     }
     refactor = fraction < 1 || rate > kRefactorRate;
     // After a partial step the iteration starts afresh.
@@ -228,6 +233,11 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
     have_extrapolation = true;
     const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
     if (weighted_max_norm(curvature, inverse_weight) <= kSettleAccuracy || h * 1e-3 < h_shortest) break;
+    // Curvature that the rounding of the three solutions explains is noise, which shorter steps
+    // only amplify. Their rounding, estimated on the last factorization (the 4h step's), is at
+    // most 4 and 2 times as large for the h and 2h steps (C/h per ulp), so at most 5 times in
+    // the curvature.
+    if (newton_.within_roundoff(curvature, kSettleAccuracy, inverse_weight, 5, x_four, q_plus / (4 * h))) break;
   }
   ConsistentState state;
   state.x_impulse = x_plus;

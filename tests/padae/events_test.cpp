@@ -3,13 +3,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <utility>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "padae/integrator.hpp"
+#include "padae/newton_matrix.hpp"
 #include "padae/semi_explicit.hpp"
 #include "run_until.hpp"
 
@@ -370,6 +374,144 @@ TEST(Events, TrapezoidalLocatesEventsAndKeepsTheAmplitudeAcrossThem) {
   EXPECT_EQ(crossings, 200);
   EXPECT_LT(worst_time, static_cast<double>(integrator.statistics().steps) * options.rtol);
   EXPECT_LT(worst_speed, 2 * crossings * options.rtol);
+}
+
+// A half-bridge's high side on a split DC bus: a 380 V source across C1 (p to m) and C2 (m to
+// ground); a switch of conductance G from p to the switch node s, which has Cs to ground and R to
+// the midpoint m. The source's current i = C1 v_m' - G (E - v_s) is index 2: in a step of length h
+// one ulp of v_m moves it by C1 / h ulp. Between events the circuit is linear, y = (v_m, v_s),
+// y' = M y + c, and solved in closed form by the eigen-decomposition of M.
+class SplitBus : public System {
+ public:
+  static constexpr double kE = 380, kC1 = 10e-6, kC2 = 10e-6, kCs = 300e-12, kR = 11, kG = 5, kT1 = 0.2e-6, kT2 = 5e-6, kRamp = 10e-9;
+  int size() const override { return 4; }  // v_p, v_m, v_s, i
+  UnknownKind kind(int unknown) const override { return unknown == 3 ? A : D; }
+  const Pattern& pattern() const override { return pattern_; }
+  int predicate_count() const override { return 1; }
+  // A gate drive that ramps up over kRamp from kT1 and down from kT2; the switch follows it
+  // at half way.
+  EvalStatus guards(double t, const Vector&, Vector& out) const override {
+    out[0] = std::clamp((t - kT1) / kRamp, 0.0, 1.0) - std::clamp((t - kT2) / kRamp, 0.0, 1.0) - 0.5;
+    return EvalStatus::ok;
+  }
+  double next_time_event(double t) const override {
+    for (double corner : {kT1, kT1 + kRamp, kT2, kT2 + kRamp})
+      if (t < corner) return corner;
+    return std::numeric_limits<double>::infinity();
+  }
+  EvalStatus load(double, const Vector& x, const Predicates& p, Load& out) override {
+    const double g = p[0] ? kG : 0.0;
+    out.q[0] = kC1 * (x[0] - x[1]);
+    out.q[1] = kC1 * (x[1] - x[0]) + kC2 * x[1];
+    out.q[2] = kCs * x[2];
+    out.f[0] = x[3] + g * (x[0] - x[2]);
+    out.f[1] = (x[1] - x[2]) / kR;
+    out.f[2] = (x[2] - x[1]) / kR + g * (x[2] - x[0]);
+    out.f[3] = x[0] - kE;
+    if (!out.jacobian_requested) return EvalStatus::ok;
+    auto at = [&](int row, int column) { return static_cast<std::size_t>(pattern_.index(row, column)); };
+    out.dq_dx[at(0, 0)] = kC1;
+    out.dq_dx[at(0, 1)] = -kC1;
+    out.dq_dx[at(1, 0)] = -kC1;
+    out.dq_dx[at(1, 1)] = kC1 + kC2;
+    out.dq_dx[at(2, 2)] = kCs;
+    out.df_dx[at(0, 0)] = g;
+    out.df_dx[at(0, 2)] = -g;
+    out.df_dx[at(0, 3)] = 1;
+    out.df_dx[at(1, 1)] = 1 / kR;
+    out.df_dx[at(1, 2)] = -1 / kR;
+    out.df_dx[at(2, 0)] = -g;
+    out.df_dx[at(2, 1)] = -1 / kR;
+    out.df_dx[at(2, 2)] = 1 / kR + g;
+    out.df_dx[at(3, 0)] = 1;
+    return EvalStatus::ok;
+  }
+  // (v_m, v_s) a time `since` after the switch was set to `closed` at (v_m, v_s) = from.
+  static Eigen::Vector2d exact(bool closed, const Eigen::Vector2d& from, double since) {
+    const double g = closed ? kG : 0.0, a = 1 / (kR * (kC1 + kC2)), b = 1 / (kR * kCs);
+    Eigen::Matrix2d m{{-a, a}, {b, -b - g / kCs}};
+    const Eigen::Vector2d c{0, g * kE / kCs};
+    // Open, M is singular: the charge (C1 + C2) v_m + Cs v_s is conserved and shared.
+    const double shared = ((kC1 + kC2) * from[0] + kCs * from[1]) / (kC1 + kC2 + kCs);
+    const Eigen::Vector2d equilibrium = closed ? Eigen::Vector2d(-m.inverse() * c) : Eigen::Vector2d(shared, shared);
+    Eigen::EigenSolver<Eigen::Matrix2d> eigen(m);
+    const Eigen::Matrix2d vectors = eigen.eigenvectors().real();
+    const Eigen::Vector2d values = eigen.eigenvalues().real();
+    const Eigen::Vector2d weights = vectors.inverse() * (from - equilibrium);
+    return equilibrium + vectors * (weights.array() * (values.array() * since).exp()).matrix();
+  }
+  // The source's current at (v_m, v_s).
+  static double current(bool closed, const Eigen::Vector2d& y) {
+    const double v_m_derivative = (y[1] - y[0]) / (kR * (kC1 + kC2));
+    return kC1 * v_m_derivative - (closed ? kG : 0.0) * (kE - y[1]);
+  }
+
+ private:
+  static constexpr std::pair<int, int> kEntries[] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 0}, {1, 1},
+                                                     {1, 2}, {2, 0}, {2, 1}, {2, 2}, {3, 0}};
+  Pattern pattern_{4, kEntries};
+};
+
+// Across both edges of the switch, at tolerances down to 1e-9, the bus and the switch node
+// follow the closed form, and so does the source's current once the 3 ns mode has settled.
+TEST(Events, ASourceInALoopOfCapacitorsFollowsTheClosedFormAtTightTolerances) {
+  for (double rtol : {1e-6, 1e-9}) {
+    SplitBus model;
+    Options options;
+    options.rtol = rtol;
+    options.atol = 1e-12;
+    Integrator integrator(model, options);
+    ASSERT_TRUE(integrator.initialize(0.0, Vector{{380, 190, 190, 0}})) << integrator.failure().reason;
+    // The closed form runs from each located event and the state there: the root finder's
+    // 100 ulp of a step are picoseconds' worth of v_s's slew.
+    double t_event = 0, worst_v = 0, worst_i = 0;
+    Eigen::Vector2d at_event{190, 190};
+    bool closed = false;
+    ASSERT_TRUE(run_until(integrator, 20e-6, [&](const StepOutcome& outcome) {
+      const Vector& x = integrator.state();
+      if (outcome.kind == StepKind::event) {
+        t_event = outcome.t, closed = integrator.predicates()[0], at_event = {x[1], x[2]};
+        return;
+      }
+      if (t_event == 0) return;
+      const Eigen::Vector2d exact = SplitBus::exact(closed, at_event, outcome.t - t_event);
+      worst_v = std::max({worst_v, std::abs(x[1] - exact[0]), std::abs(x[2] - exact[1])});
+      // After the 3 ns mode has died out, in units of the current while the switch conducts
+      // (E / 2 through R, C1's share); the current is v_m's derivative, one order less accurate
+      // than v_m.
+      const double scale = SplitBus::kC1 / (SplitBus::kC1 + SplitBus::kC2) * SplitBus::kE / 2 / SplitBus::kR;
+      if (outcome.t > t_event + 30e-9) worst_i = std::max(worst_i, std::abs(x[3] - SplitBus::current(closed, exact)) / scale);
+    })) << "rtol " << rtol << ": " << integrator.failure().reason;
+    EXPECT_LT(worst_v, 10 * rtol * SplitBus::kE) << "rtol " << rtol;
+    EXPECT_LT(worst_i, 100 * rtol) << "rtol " << rtol;
+  }
+}
+
+// In a step of h = 1 ps, one ulp of v_m (190 V) is C1 / h ulp = 2.8e-7 A of the source's current
+// i = -8.3 A, 34 times its tolerance at rtol 1e-9. A correction of that size in i is the residual's
+// rounding; one a thousand times larger is not, nor is a correction beyond the tolerance in a
+// differential unknown (the state is always resolved to its tolerance).
+TEST(NewtonMatrix, RoundOffAllowanceCoversAnIndexTwoCurrentsUlpNoiseOnly) {
+  SplitBus model;
+  Statistics statistics;
+  NewtonMatrix newton(model, statistics, Vector::Constant(4, 1e-12));
+  const Vector x{{380, 190, 190, -8.3}};
+  const double rtol = 1e-9, cj = 1e12;
+  ASSERT_EQ(newton.factor(0, x, {0}, cj), NewtonMatrix::Outcome::ok);
+  const Vector q_start = newton.load().q;
+  const Vector inverse_weight = (rtol * x.cwiseAbs() + Vector::Constant(4, 1e-12)).cwiseInverse();
+  const double ulp_current = SplitBus::kC1 * cj * (std::nextafter(190.0, 400.0) - 190.0);
+  auto within = [&](int unknown, double correction) {
+    Vector delta = Vector::Zero(4);
+    delta[unknown] = correction;
+    return newton.within_roundoff(delta, 1, inverse_weight, 1, x, cj * q_start);
+  };
+  EXPECT_GT(ulp_current, 30 / inverse_weight[3]);
+  EXPECT_TRUE(within(3, ulp_current));
+  EXPECT_TRUE(within(3, -ulp_current));
+  EXPECT_FALSE(within(3, 1e3 * ulp_current));
+  EXPECT_TRUE(within(1, 0.9 / inverse_weight[1]));
+  EXPECT_FALSE(within(1, 2 / inverse_weight[1]));
 }
 
 }  // namespace

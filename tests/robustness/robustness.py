@@ -38,9 +38,6 @@ BAD_DIR = HERE / "invalid"  # the netlist corpus test skips directories named in
 
 # Cases padsim fails today, with the reason (shown in CTest as disabled and in the report).
 KNOWN_FAILURES = {
-    "source_capacitor_loop_tight": "the re-initialization's settling steps cannot resolve a source current "
-                                   "through a loop of capacitors (index 2) at rtol 1e-6 and 1e-9: Newton cycles "
-                                   "at round-off and the run stops at 5 us (found in session 24)",
 }
 
 BAD_INPUT_SECONDS = 10  # a refusal takes milliseconds; 10 s leaves room for the sanitizer build

@@ -27,7 +27,6 @@ NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const C
                            const Vector& inverse_weight, double tolerance, int max_iterations, Vector& x,
                            int branch_sign) {
   Vector residual, step, trial, simplified;
-  const Vector roundoff_terms = equation.q_derivative.cwiseAbs() + equation.c * equation.q_anchor.cwiseAbs();
   // The last correction taken; q and f are left evaluated at the solution. A solution where the
   // matrix's determinant has another sign than on the branch is across a fold from it, on
   // another branch: refused.
@@ -59,7 +58,9 @@ NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const C
       // No longer shrinking, within one tolerance unit or within what rounding makes of the
       // correction (index 2: a source's current through capacitors, C/h per ulp of their
       // voltages): the round-off floor, not a failure.
-      if (damping == 1 && (norm <= 1 || newton.within_roundoff(step, 1, inverse_weight, 1, x, roundoff_terms)))
+      if (damping == 1 && (norm <= 1 || newton.within_roundoff(step, 1, inverse_weight, 1, x,
+                                                               equation.q_derivative.cwiseAbs() +
+                                                                   equation.c * equation.q_anchor.cwiseAbs())))
         return converge(step);
     }
     // The simplified correction is on the matrix at the last iterate, which can be far stiffer

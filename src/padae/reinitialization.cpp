@@ -81,11 +81,11 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     double rate = norm / previous_norm;
     if (fraction == 1) {
       if (norm <= kConvergedNorm) return true;
-      if (refactor && stalled_at_roundoff(norm, previous_norm)) return true;  // floating capacitors
-      // Beyond the tolerance, the stall can still be the rounding of the residual's terms: a
-      // source's current through a loop of capacitors (index 2) moves by C/h per ulp of their
-      // voltages, more than its tolerance in steps this short.
-      if (refactor && stalled(norm, previous_norm) && newton_.within_roundoff(delta, 1, inverse_weight, 1, x, cj * q_start))
+      // Stalled within the tolerance (floating capacitors), or beyond it within the rounding of
+      // the residual's terms: a source's current through a loop of capacitors (index 2) moves
+      // by C/h per ulp of their voltages, more than its tolerance in steps this short.
+      if (refactor && stalled(norm, previous_norm) &&
+          (norm <= 1 || newton_.within_roundoff(delta, 1, inverse_weight, 1, x, cj * q_start)))
         return true;
     }
     refactor = fraction < 1 || rate > kRefactorRate;

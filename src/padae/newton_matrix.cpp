@@ -223,11 +223,8 @@ NewtonMatrix::Outcome NewtonMatrix::factor_loaded() {
 
 bool NewtonMatrix::within_roundoff(const Vector& v, double tolerances, const Vector& inverse_weight,
                                    double roundoffs, const Vector& x, const Vector& other_terms) const {
-  const auto& starts = pattern_.column_starts();
-  const auto& rows = pattern_.row_indices();
   roundoff_ = other_terms.cwiseAbs();
-  for (int column = 0; column < pattern_.size(); ++column)
-    for (int k = starts[column]; k < starts[column + 1]; ++k) roundoff_[rows[k]] += std::abs(matrix_[k] * x[column]);
+  add_absolute_product(matrix_, x, roundoff_);
   for (int row = 0; row < pattern_.size(); ++row) {
     // Signs from the bits of a multiplicative hash: independent of the circuit's structure.
     const bool negative = (static_cast<std::uint32_t>(row) * 2654435761u) & 0x8000u;
@@ -242,12 +239,15 @@ bool NewtonMatrix::within_roundoff(const Vector& v, double tolerances, const Vec
 }
 
 void NewtonMatrix::charge_scale(const Vector& scale, Vector& out) const {
+  out.setZero(pattern_.size());
+  add_absolute_product(abs_dq_dx_, scale, out);
+}
+
+void NewtonMatrix::add_absolute_product(const std::vector<double>& values, const Vector& v, Vector& out) const {
   const auto& starts = pattern_.column_starts();
   const auto& rows = pattern_.row_indices();
-  out.setZero(pattern_.size());
   for (int column = 0; column < pattern_.size(); ++column)
-    for (int k = starts[column]; k < starts[column + 1]; ++k)
-      out[rows[k]] += abs_dq_dx_[k] * scale[column];
+    for (int k = starts[column]; k < starts[column + 1]; ++k) out[rows[k]] += std::abs(values[k]) * std::abs(v[column]);
 }
 
 }  // namespace padae

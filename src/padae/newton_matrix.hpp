@@ -64,6 +64,8 @@ class NewtonMatrix {
   EvalStatus finite_difference_derivatives(double t, const Vector& x, const Predicates& p,
                                            Load& out);
   Outcome factor_loaded();
+  // out += |A| |v|, A the matrix with these values on the pattern.
+  void add_absolute_product(const std::vector<double>& values, const Vector& v, Vector& out) const;
   // The factorization's drift from df/dx + cj dq/dx as loaded now: the largest, over the rows,
   // of the row's largest |factored - now| over its largest |now|; infinite when the
   // factorization is of another mode or not of factor()'s form. Row by row because what moves

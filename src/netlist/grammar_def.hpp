@@ -251,6 +251,16 @@ inline auto const make_ac_spec = [](auto& context) {
   _val(context) = std::move(spec);
 };
 
+// A waveform in parentheses: its name=value options may stand inside them or after them
+// (ngspice reads "pwl(0 0 1u 1 r=0)" and "pwl(0 0 1u 1) r=0" alike).
+inline auto const make_waveform_spec = [](auto& context) {
+  ast::SourceSpec spec;
+  spec.kind = at_c<0>(_attr(context));
+  spec.args = at_c<1>(_attr(context));
+  spec.options = at_c<2>(_attr(context));
+  for (auto const& option : at_c<3>(_attr(context))) spec.options.push_back(option);
+  _val(context) = std::move(spec);
+};
 inline auto const make_bare_spec = [](auto& context) {
   ast::SourceSpec spec;
   spec.kind.where = _attr(context)->where;
@@ -461,10 +471,14 @@ x3::rule<instance_card_id, ast::Instance> const instance_card = "an X card";
 
 x3::rule<class source_spec_id, ast::SourceSpec> const source_spec = "a source value";
 x3::rule<class waveform_spec_id, ast::SourceSpec> const waveform_spec = "a waveform";
+x3::rule<class parenthesized_waveform_id, ast::SourceSpec> const parenthesized_waveform = "a waveform";
+x3::rule<class bare_waveform_id, ast::SourceSpec> const bare_waveform = "a waveform";
 x3::rule<class dc_spec_id, ast::SourceSpec> const dc_spec = "dc value";
 x3::rule<class ac_spec_id, ast::SourceSpec> const ac_spec = "ac magnitude";
 x3::rule<class bare_spec_id, ast::SourceSpec> const bare_spec = "a value";
 x3::rule<class waveform_kind_id, ast::Word> const waveform_kind = "pulse, sin, exp or pwl";
+x3::rule<class waveform_arguments_id, std::vector<ExpressionPtr>> const waveform_arguments = "a value";
+x3::rule<class waveform_values_id, std::vector<ExpressionPtr>> const waveform_values = "a value";
 x3::rule<class dc_word_id, ast::Word> const dc_word = "dc";
 x3::rule<class ac_word_id, ast::Word> const ac_word = "ac";
 x3::rule<class quantity_id, ast::Word> const quantity = "V= or I=";
@@ -480,8 +494,13 @@ auto const waveform_kind_def =
     x3::raw[keyword("pulse") | keyword("sin") | keyword("exp") | keyword("pwl")][make_word];
 auto const dc_word_def = x3::raw[keyword("dc")][make_word];
 auto const ac_word_def = x3::raw[keyword("ac")][make_word];
-auto const waveform_spec_def =
-    (waveform_kind >> '(') > *(value >> -lit(',')) > closing_paren > *assignment;
+auto const waveform_spec_def = parenthesized_waveform | bare_waveform;
+auto const parenthesized_waveform_def =
+    ((waveform_kind >> '(') > waveform_arguments > *assignment > closing_paren > *assignment)[make_waveform_spec];
+// SPICE also takes a waveform's values without parentheses: "PULSE 0 5 1u 1n 1n 2u 5u".
+auto const bare_waveform_def = (waveform_kind >> !lit('(')) > waveform_values > *assignment;
+auto const waveform_arguments_def = *(value >> -lit(','));
+auto const waveform_values_def = +(value >> -lit(','));
 auto const dc_spec_def = (dc_word > value)[make_dc_spec];
 auto const ac_spec_def = (ac_word > value > -value)[make_ac_spec];
 auto const bare_spec_def = value[make_bare_spec];
@@ -576,7 +595,8 @@ BOOST_SPIRIT_DEFINE(unary, power, primary, node_voltage, branch_current, call, a
                     coupling_card, source_card, voltage_controlled_card, current_controlled_card,
                     behavioral_card, diode_card, voltage_switch_card, current_switch_card)
 BOOST_SPIRIT_DEFINE(instance_card, source_spec, waveform_spec, dc_spec, ac_spec, bare_spec,
-                    waveform_kind, dc_word, ac_word, quantity, switch_state, instance_node, instance_nodes,
+                    waveform_kind, waveform_arguments, waveform_values, parenthesized_waveform,
+                    bare_waveform, dc_word, ac_word, quantity, switch_state, instance_node, instance_nodes,
                     param_card, model_card, subckt_card, ends_card, include_card, tran_card,
                     node_values_card, options_card)
 BOOST_SPIRIT_DEFINE(output_card, temp_card, parameters, model_type, model_parameters, port,

@@ -32,6 +32,8 @@ const Malformed malformed[] = {
     {"t\nX1\n", 2, 3, "expected a node name"},
     {"t\nV1 a 0 pulse(0 1\n", 2, 17, "expected ')'"},
     {"t\nV1 a 0 pulse(0)\n", 2, 8, "pulse takes 2 to 8 values, not 1"},
+    {"t\nV1 a 0 pulse\n", 2, 13, "expected a value"},
+    {"t\nV1 a 0 pulse 0\n", 2, 8, "pulse takes 2 to 8 values, not 1"},
     {"t\nV1 a 0 sin(0 1 2 3 4 5 6)\n", 2, 8, "sin takes 2 to 6 values, not 7"},
     {"t\nV1 a 0 pwl(0 0 1)\n", 2, 8, "pwl takes time-value pairs, not 3 values"},
     {"t\nV1 a 0 dc 1 2\n", 2, 13, "a second DC value for v1"},

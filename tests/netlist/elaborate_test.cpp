@@ -159,6 +159,17 @@ TEST(Elaborate, SourcesAndControlledSources) {
   EXPECT_EQ(pwl.args, (std::vector<double>{0, 0, 1e-6, 1, 2e-6, 1, 3e-6, 0}));
   EXPECT_EQ(pwl.repeat_from, 1e-6);
   EXPECT_EQ(pwl.delay, 0.5e-6);
+  // Without parentheses, as SPICE also reads them: the same waveforms.
+  EXPECT_EQ(element(circuit, "v6").source.waveform->kind, netlist::WaveformKind::pulse);
+  EXPECT_EQ(element(circuit, "v6").source.waveform->args, pulse.args);
+  EXPECT_EQ(element(circuit, "v7").source.dc, 0.5);
+  EXPECT_EQ(element(circuit, "v7").source.waveform->kind, netlist::WaveformKind::sin);
+  EXPECT_EQ(element(circuit, "v7").source.waveform->args, (std::vector<double>{0.5, 1, 1e6}));
+  EXPECT_EQ(element(circuit, "v8").source.waveform->args, (std::vector<double>{0, 0, 1e-6, 1}));
+  EXPECT_EQ(element(circuit, "v8").source.waveform->delay, 0.5e-6);
+  // Options inside the parentheses as well as after them, as ngspice reads them.
+  EXPECT_EQ(element(circuit, "v9").source.waveform->repeat_from, 1e-6);
+  EXPECT_EQ(element(circuit, "v9").source.waveform->delay, 0.5e-6);
   EXPECT_EQ(element(circuit, "i1").kind, ElementKind::current_source);
   EXPECT_EQ(element(circuit, "i1").source.dc, 1e-3);
   EXPECT_EQ(element(circuit, "i2").source.dc, 0.0);

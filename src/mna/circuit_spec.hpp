@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "netlist/expression.hpp"
@@ -16,8 +17,14 @@ namespace mna {
 // parameters take ngspice's defaults (some depend on TSTEP and TSTOP, see waveform.hpp).
 struct Waveform {
   enum class Shape { constant, pulse, sine, exponential, piecewise_linear };
+  Waveform() = default;
+  Waveform(Shape shape_of, std::vector<double> parameters_of, std::optional<double> repeat_from_of = std::nullopt)
+      : shape(shape_of), parameters(std::move(parameters_of)), repeat_from(repeat_from_of) {}
+
   Shape shape = Shape::constant;
   std::vector<double> parameters;
+  // PWL r=: after its last point the function repeats from this time point on.
+  std::optional<double> repeat_from;
 };
 
 struct ElementSpec {

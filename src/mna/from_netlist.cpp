@@ -6,7 +6,7 @@ namespace mna {
 
 namespace {
 
-Waveform waveform_from(const netlist::Waveform& w, const std::string& element) {
+Waveform waveform_from(const netlist::Waveform& w) {
   using Kind = netlist::WaveformKind;
   Waveform out;
   out.parameters = w.args;
@@ -16,9 +16,11 @@ Waveform waveform_from(const netlist::Waveform& w, const std::string& element) {
     case Kind::exp: out.shape = Waveform::Shape::exponential; break;
     case Kind::pwl:
       out.shape = Waveform::Shape::piecewise_linear;
-      if (w.repeat_from) throw ModelError("element '" + element + "': PWL r= (repeat) is not supported");
-      if (w.delay)
+      out.repeat_from = w.repeat_from;
+      if (w.delay) {
         for (std::size_t k = 0; k < out.parameters.size(); k += 2) out.parameters[k] += *w.delay;
+        if (out.repeat_from) *out.repeat_from += *w.delay;
+      }
       break;
   }
   return out;
@@ -54,7 +56,7 @@ CircuitSpec circuit_from_netlist(const netlist::FlatCircuit& flat) {
       case Kind::voltage_source:
       case Kind::current_source:
         spec.value = element.source.dc;
-        if (element.source.waveform) spec.waveform = waveform_from(*element.source.waveform, element.name);
+        if (element.source.waveform) spec.waveform = waveform_from(*element.source.waveform);
         break;
       case Kind::behavioral:
         spec.expression = element.expression;

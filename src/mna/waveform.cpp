@@ -90,7 +90,13 @@ SourceFunction::PulseCorners SourceFunction::compute_pulse_corners(double t, boo
 
 SourceFunction::SourceFunction(const Waveform& waveform, double dc_value, const RunSettings& run,
                                const std::string& element)
-    : shape_(waveform.shape), p_(with_defaults(waveform.shape, waveform.parameters, run, element)), dc_(dc_value) {}
+    : shape_(waveform.shape), p_(with_defaults(waveform.shape, waveform.parameters, run, element)), dc_(dc_value) {
+  // r= the last time point repeats nothing: the function holds its last value, as without r=.
+  if (waveform.repeat_from && *waveform.repeat_from < p_[p_.size() - 2]) {
+    repeat_from_ = waveform.repeat_from;
+    repeat_period_ = p_[p_.size() - 2] - *repeat_from_;
+  }
+}
 
 double SourceFunction::value(double t) const {
   using std::numbers::pi;
@@ -118,20 +124,64 @@ double SourceFunction::value(double t) const {
       if (t > td2) v += (v1 - v2) * (1 - std::exp(-(t - td2) / tau2));
       return v;
     }
-    case Waveform::Shape::piecewise_linear: {
-      const std::size_t n = p_.size() / 2;
-      if (t <= p_[0]) return p_[1];
-      for (std::size_t k = 1; k < n; ++k) {
-        const double t0 = p_[2 * k - 2], t1 = p_[2 * k];
-        if (t <= t1) {
-          if (t1 == t0) return p_[2 * k + 1];
-          return p_[2 * k - 1] + (p_[2 * k + 1] - p_[2 * k - 1]) * (t - t0) / (t1 - t0);
-        }
-      }
-      return p_[2 * n - 1];
-    }
+    case Waveform::Shape::piecewise_linear: return pwl_value(t);
   }
   return dc_;
+}
+
+// Repetition j of a PWL with r= spans (start(j), start(j + 1)], start(j) = last + j P: its time
+// points are those after r, shifted by start(j) - r. value() and next_corner() compute them by
+// the very same expressions, so that at a corner the integrator lands on both agree on the side
+// (the left limit), also where the function jumps there.
+double SourceFunction::repetition_start(double j) const { return p_[p_.size() - 2] + j * repeat_period_; }
+
+double SourceFunction::repetition_index(double t) const {
+  double j = std::floor((t - p_[p_.size() - 2]) / repeat_period_);
+  if (repetition_start(j) >= t) --j;
+  if (repetition_start(j + 1) < t) ++j;
+  return j;
+}
+
+double SourceFunction::repetition_time(std::size_t point, double j) const {
+  const double time = p_[2 * point];
+  if (point + 1 == p_.size() / 2) return repetition_start(j + 1);
+  return repetition_start(j) + (time - *repeat_from_);
+}
+
+double SourceFunction::pwl_value(double t) const {
+  const std::size_t n = p_.size() / 2;
+  const bool repeating = repeat_from_ && t > p_[2 * n - 2];
+  // The points of the first pass, or those of the repetition that contains t: from the last one
+  // at time r on.
+  std::size_t first = 0;
+  double j = 0;
+  if (repeating) {
+    while (first + 1 < n && p_[2 * first + 2] <= *repeat_from_) ++first;
+    j = repetition_index(t);
+  }
+  auto time_of = [&](std::size_t k) { return repeating ? repetition_time(k, j) : p_[2 * k]; };
+  if (t <= time_of(first)) return p_[2 * first + 1];
+  for (std::size_t k = first + 1; k < n; ++k) {
+    const double t0 = time_of(k - 1), t1 = time_of(k);
+    if (t <= t1) {
+      if (t1 == t0) return p_[2 * k + 1];
+      return p_[2 * k - 1] + (p_[2 * k + 1] - p_[2 * k - 1]) * (t - t0) / (t1 - t0);
+    }
+  }
+  return p_[2 * n - 1];
+}
+
+double SourceFunction::pwl_next_corner(double t) const {
+  const std::size_t n = p_.size() / 2;
+  for (std::size_t k = 0; k < n; ++k)
+    if (p_[2 * k] > t) return p_[2 * k];
+  if (!repeat_from_) return infinity;
+  // t is at most the end of its repetition: the next corner is in it or in the one after.
+  const double j = repetition_index(t);
+  for (double repetition : {j, j + 1})
+    for (std::size_t k = 0; k < n; ++k)
+      if (p_[2 * k] > *repeat_from_ && repetition_time(k, repetition) > t) return repetition_time(k, repetition);
+  return infinity;
 }
 
 double SourceFunction::resolution_step() const {
@@ -157,10 +207,7 @@ double SourceFunction::next_corner(double t) const {
     case Waveform::Shape::exponential:
       if (p_[2] > t) return p_[2];
       return p_[4] > t ? p_[4] : infinity;
-    case Waveform::Shape::piecewise_linear:
-      for (std::size_t i = 0; i < p_.size(); i += 2)
-        if (p_[i] > t) return p_[i];
-      return infinity;
+    case Waveform::Shape::piecewise_linear: return pwl_next_corner(t);
   }
   return infinity;
 }

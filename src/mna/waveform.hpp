@@ -31,10 +31,19 @@ class SourceFunction {
   };
   PulseCorners pulse_corners(double t, bool left) const;
   PulseCorners compute_pulse_corners(double t, bool left) const;
+  // PWL r=: repetition j's start, the repetition that contains t (its end belongs to it, where
+  // the value is the left limit), and a time point's time in repetition j.
+  double repetition_start(double j) const;
+  double repetition_index(double t) const;
+  double repetition_time(std::size_t point, double j) const;
+  double pwl_value(double t) const;
+  double pwl_next_corner(double t) const;
 
   Waveform::Shape shape_;
   std::vector<double> p_;  // parameters with defaults filled in
   double dc_;
+  std::optional<double> repeat_from_;
+  double repeat_period_ = 0;  // last PWL time - repeat_from_
   // The period pulse_corners() found last: every load asks for the same one (the integrator,
   // its output and its event location all evaluate inside one step), and finding it costs a
   // division and a floor. Not thread-safe, as the model that owns it is not.

@@ -60,14 +60,12 @@ TEST(FromNetlist, ElementsModelsWaveformsAndInitialConditions) {
   EXPECT_EQ(c.nodesets.at("b"), 0.1);
 }
 
-TEST(FromNetlist, PwlDelayShiftsTimesAndRepeatIsRefused) {
+TEST(FromNetlist, PwlDelayShiftsTimesAndTheRepeatStart) {
   const CircuitSpec c = adapt("* pwl\nV1 a 0 PWL(0 0 1m 1) td=2m\nR1 a 0 1\n.tran 1u 5m\n.end\n");
   EXPECT_EQ(element(c, "v1").waveform.parameters, (std::vector<double>{2e-3, 0, 3e-3, 1}));
-  netlist::Diagnostics diagnostics;
-  const auto flat = netlist::elaborate(
-      netlist::parse_text("* pwl\nV1 a 0 PWL(0 0 1m 1) r=0\nR1 a 0 1\n.tran 1u 5m\n.end\n", "r.cir", diagnostics), diagnostics);
-  ASSERT_TRUE(flat.has_value()) << diagnostics.to_string();
-  EXPECT_THROW(circuit_from_netlist(*flat), ModelError);
+  EXPECT_FALSE(element(c, "v1").waveform.repeat_from);
+  const CircuitSpec repeated = adapt("* pwl\nV1 a 0 PWL(0 0 1m 1 2m 0) r=1m td=2m\nR1 a 0 1\n.tran 1u 5m\n.end\n");
+  EXPECT_EQ(element(repeated, "v1").waveform.repeat_from, 3e-3);
 }
 
 }  // namespace

@@ -140,6 +140,62 @@ TEST(Waveform, PiecewiseLinearInterpolatesAndHoldsEnds) {
   EXPECT_EQ(f.next_corner(5e-6), infinity);
 }
 
+TEST(Waveform, PiecewiseLinearRepeatsFromRAsNgspice) {
+  // PWL(0 0 1u 1 2u 0 3u 0.5) r=1u td=0.25u: ngspice 38 (maxstep 50 ns) writes the first pass,
+  // then jumps from 0.5 back to the value at r (1) at 3.25 us and repeats the 2 us from r on.
+  Waveform w{Shape::piecewise_linear, {0.25e-6, 0, 1.25e-6, 1, 2.25e-6, 0, 3.25e-6, 0.5}, 1.25e-6};
+  SourceFunction f(w, 0, run, "v1");
+  auto closed_form = [](double t) {
+    auto first_pass = [](double s) {
+      if (s <= 0.25e-6) return 0.0;
+      if (s <= 1.25e-6) return (s - 0.25e-6) / 1e-6;
+      if (s <= 2.25e-6) return 1 - (s - 1.25e-6) / 1e-6;
+      return 0.5 * std::min(1.0, (s - 2.25e-6) / 1e-6);
+    };
+    if (t <= 3.25e-6) return first_pass(t);
+    return first_pass(1.25e-6 + std::fmod(t - 3.25e-6, 2e-6));
+  };
+  EXPECT_DOUBLE_EQ(f.value(3.25e-6), 0.5);  // the left limit at the jump
+  EXPECT_NEAR(f.value(3.5e-6), 0.75, 1e-12);
+  EXPECT_NEAR(f.value(5.75e-6), 0.5, 1e-12);  // the second repetition, 0.5 us after r
+  EXPECT_DOUBLE_EQ(f.next_corner(3e-6), 3.25e-6);
+  EXPECT_NEAR(f.next_corner(3.25e-6), 4.25e-6, 1e-20);
+  EXPECT_NEAR(f.next_corner(4.25e-6), 5.25e-6, 1e-20);
+  EXPECT_NEAR(f.next_corner(5.25e-6), 6.25e-6, 1e-20);
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> time(0, 100e-6);
+  for (int k = 0; k < 2000; ++k) {
+    const double t = time(random);
+    EXPECT_NEAR(f.value(t), closed_form(t), 1e-8) << "t = " << t;
+  }
+}
+
+TEST(Waveform, RepeatedPiecewiseLinearJumpsJustAfterTheCornersItReports) {
+  // A square wave of vertical edges, PWL(0 0 1u 0 1u 1 2u 1 2u 0 3u 0) r=0: at every corner
+  // next_corner() reports, over a thousand repetitions, the value is the left limit and one ulp
+  // later the right one, so that a step ending on the corner sees no part of the jump.
+  SourceFunction f({Shape::piecewise_linear, {0, 0, 1e-6, 0, 1e-6, 1, 2e-6, 1, 2e-6, 0, 3e-6, 0}, 0.0}, 0, run, "v1");
+  double t = 0;
+  int edges = 0;
+  while ((t = f.next_corner(t)) < 3e-3) {
+    const double phase = std::fmod(t, 3e-6) / 1e-6;  // near 0 (holds 0), 1 (rises) or 2 (falls)
+    const double before = f.value(t), after = f.value(std::nextafter(t, 1.0));
+    if (std::abs(phase - 1) < 1e-6) {
+      EXPECT_EQ(before, 0) << "t = " << t;
+      EXPECT_EQ(after, 1) << "t = " << t;
+      ++edges;
+    } else if (std::abs(phase - 2) < 1e-6) {
+      EXPECT_EQ(before, 1) << "t = " << t;
+      EXPECT_EQ(after, 0) << "t = " << t;
+      ++edges;
+    } else {
+      EXPECT_EQ(before, 0) << "t = " << t;
+      EXPECT_EQ(after, 0) << "t = " << t;
+    }
+  }
+  EXPECT_EQ(edges, 2000);
+}
+
 TEST(Waveform, RejectsMalformedParameters) {
   EXPECT_THROW(SourceFunction({Shape::piecewise_linear, {0, 1, 2}}, 0, run, "v1"), ModelError);
   EXPECT_THROW(SourceFunction({Shape::piecewise_linear, {2, 1, 1, 0}}, 0, run, "v1"), ModelError);

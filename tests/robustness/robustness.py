@@ -805,6 +805,28 @@ def case_source_jump_fast_rc(c):
         c.stats_figure(r, f"{label}: ")
 
 
+def case_pwl_repeat_square_rc(c):
+    tau, period, first_rise = 200e-9, 3e-6, 1.5e-6
+    high, low = math.exp(-1e-6 / tau), math.exp(-2e-6 / tau)  # decay over the high and low parts
+
+    def exact(t):
+        # v_k, v(n1) at rise k, from v_{k+1} = low (1 - high) + low high v_k and v_0 = 0; then the
+        # relaxation toward 1 V for 1 us and toward 0 for 2 us.
+        if t <= first_rise:
+            return 0.0
+        k = math.ceil((t - first_rise) / period) - 1
+        v_k = low * (1 - high) / (1 - low * high) * (1 - (low * high) ** k)
+        u = t - (first_rise + k * period)
+        if u <= 1e-6:
+            return 1 + (v_k - 1) * math.exp(-u / tau)
+        return (1 + (v_k - 1) * high) * math.exp(-(u - 1e-6) / tau)
+
+    for label, rtol, args, r in tolerance_runs(c):
+        err, at = max_error(r, "v(n1)", exact)
+        c.expect(err <= 10 * rtol, f"{label}: v(n1) max error {g(err)} V (at {g(at)} s) <= 10 rtol x 1 V", key=True)
+        c.stats_figure(r, f"{label}: ")
+
+
 # --- faults ---------------------------------------------------------------------------------------
 
 def case_log_negative_off_path(c):
@@ -1071,6 +1093,7 @@ NUMERIC_CASES = [
     ("events", "first_step_events", case_first_step_events),
     ("events", "events_closer_than_min_step", case_events_closer_than_min_step),
     ("events", "source_jump_fast_rc", case_source_jump_fast_rc),
+    ("events", "pwl_repeat_square_rc", case_pwl_repeat_square_rc),
     ("faults", "log_negative_off_path", case_log_negative_off_path),
     ("faults", "newton_divergence", case_newton_divergence),
     ("faults", "tolerance_below_roundoff", case_tolerance_below_roundoff),

@@ -67,6 +67,14 @@ struct CurrentControlled {
   ExpressionPtr gain;
 };
 
+// E G: name n+ n- poly(n) nc1+ nc1- ... ncn+ ncn- p0 p1 ...; F H: name n+ n- poly(n) v1 ... vn
+// p0 p1 ...: the controls and the coefficients are told apart by n, in elaboration.
+struct Polynomial {
+  Word name, positive, negative;
+  ExpressionPtr dimension;
+  std::vector<Word> arguments;
+};
+
 // B: name n+ n- v=expr | i=expr   (quantity is "v" or "i")
 struct Behavioral {
   Word name, positive, negative, quantity;
@@ -186,7 +194,7 @@ struct IgnoredCard {
 
 struct Card {
   std::variant<TwoTerminal, Coupling, IndependentSource, VoltageControlled, CurrentControlled,
-               Behavioral, Diode, VoltageSwitch, CurrentSwitch, Instance, ParamCard, ModelCard,
+               Polynomial, Behavioral, Diode, VoltageSwitch, CurrentSwitch, Instance, ParamCard, ModelCard,
                Subcircuit, Include, TranCard, NodeValuesCard, OptionsCard, OutputCard, TempCard,
                TitleCard, IgnoredCard>
       node;

@@ -28,6 +28,7 @@ BOOST_FUSION_ADAPT_STRUCT(netlist::ast::IndependentSource, name, positive, negat
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::VoltageControlled, name, positive, negative,
                           control_positive, control_negative, gain)
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::CurrentControlled, name, positive, negative, control, gain)
+BOOST_FUSION_ADAPT_STRUCT(netlist::ast::Polynomial, name, positive, negative, dimension, arguments)
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::Behavioral, name, positive, negative, quantity, expression)
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::Diode, name, anode, cathode, model, area, off, parameters)
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::VoltageSwitch, name, positive, negative, control_positive,

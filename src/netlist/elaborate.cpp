@@ -671,6 +671,88 @@ class Elaborator {
     add(std::move(element));
   }
 
+  // POLY(n): a B source of the polynomial in the n controls (node pairs' voltages for E G, the
+  // currents of V sources for F H), with SPICE's order of the terms (polynomial_of).
+  void elaborate_card(const ast::Polynomial& card, const ast::Card&, const Instance& instance) {
+    const char letter = card.name.text[0];
+    const bool current_controlled = letter == 'f' || letter == 'h';
+    auto dimension = value(card.dimension, *instance.scope);
+    if (!dimension) return;
+    if (!(*dimension >= 1 && *dimension <= 16 && *dimension == std::floor(*dimension))) {
+      diagnostics_.error(card.dimension->where, "poly() takes a whole number of controls from 1 to 16");
+      return;
+    }
+    const auto controls = static_cast<std::size_t>(*dimension);
+    const std::size_t control_words = current_controlled ? controls : 2 * controls;
+    if (card.arguments.size() <= control_words) {
+      diagnostics_.error(card.name.where, "poly(" + std::to_string(controls) + ") needs " + std::to_string(control_words) +
+                                              (current_controlled ? (controls == 1 ? " voltage source" : " voltage sources")
+                                                                  : " control nodes") +
+                                              " and at least one coefficient");
+      return;
+    }
+    auto make = [](decltype(Expression::node) node, SourceRange where) {
+      return std::make_shared<const Expression>(Expression{std::move(node), where});
+    };
+    std::vector<ExpressionPtr> variables;
+    for (std::size_t k = 0; k < controls; ++k) {
+      if (current_controlled) {
+        const ast::Word& source = card.arguments[k];
+        variables.push_back(make(BranchCurrent{source.text}, source.where));
+      } else {
+        const ast::Word& positive = card.arguments[2 * k];
+        const ast::Word& negative = card.arguments[2 * k + 1];
+        variables.push_back(make(NodeVoltage{positive.text, negative.text}, positive.where));
+      }
+    }
+    std::vector<double> coefficients;
+    for (std::size_t k = control_words; k < card.arguments.size(); ++k) {
+      auto coefficient = parse_number(card.arguments[k].text);
+      if (!coefficient) {
+        diagnostics_.error(card.arguments[k].where, "expected a poly coefficient, not '" + card.arguments[k].text + "'");
+        return;
+      }
+      coefficients.push_back(*coefficient);
+    }
+    FlatElement element = element_of(ElementKind::behavioral, card.name, instance);
+    element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text)};
+    element.behavioral_is_voltage = letter == 'e' || letter == 'h';
+    element.expression = substitute(polynomial_of(variables, coefficients, card.name.where), instance);
+    if (element.expression) add(std::move(element));
+  }
+
+  // p0 + p1 x1 + ... + pn xn + p x1^2 + p x1 x2 + ... + p x1 xn + p x2^2 + ...: the terms of each
+  // degree in lexicographic order of their non-decreasing variable indices (SPICE2's order);
+  // zero coefficients are left out.
+  static ExpressionPtr polynomial_of(const std::vector<ExpressionPtr>& variables,
+                                     const std::vector<double>& coefficients, SourceRange where) {
+    auto make = [&](decltype(Expression::node) node) {
+      return std::make_shared<const Expression>(Expression{std::move(node), where});
+    };
+    ExpressionPtr sum;
+    std::size_t next = 0;
+    const std::size_t n = variables.size();
+    for (std::size_t degree = 0; next < coefficients.size(); ++degree) {
+      std::vector<std::size_t> indices(degree, 0);
+      for (bool more = true; more && next < coefficients.size(); ++next) {
+        if (coefficients[next] != 0) {
+          ExpressionPtr term = make(Number{coefficients[next]});
+          for (std::size_t index : indices) term = make(Binary{BinaryOperator::multiply, term, variables[index]});
+          sum = sum ? make(Binary{BinaryOperator::add, sum, term}) : term;
+        }
+        // The next non-decreasing tuple: the rightmost index below n - 1 goes up, and those
+        // after it take its new value.
+        auto position = std::find_if(indices.rbegin(), indices.rend(), [&](std::size_t i) { return i + 1 < n; });
+        more = position != indices.rend();
+        if (more) {
+          const std::size_t raised = ++*position;
+          std::fill(indices.rbegin(), position, raised);
+        }
+      }
+    }
+    return sum ? sum : make(Number{0});
+  }
+
   void elaborate_card(const ast::Behavioral& card, const ast::Card&, const Instance& instance) {
     FlatElement element = element_of(ElementKind::behavioral, card.name, instance);
     element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text)};

@@ -321,6 +321,7 @@ struct coupling_card_id : card_error_handler {};
 struct source_card_id : card_error_handler {};
 struct voltage_controlled_card_id : card_error_handler {};
 struct current_controlled_card_id : card_error_handler {};
+struct polynomial_card_id : card_error_handler {};
 struct behavioral_card_id : card_error_handler {};
 struct diode_card_id : card_error_handler {};
 struct voltage_switch_card_id : card_error_handler {};
@@ -463,6 +464,7 @@ x3::rule<coupling_card_id, ast::Coupling> const coupling_card = "a K card";
 x3::rule<source_card_id, ast::IndependentSource> const source_card = "a V or I card";
 x3::rule<voltage_controlled_card_id, ast::VoltageControlled> const voltage_controlled_card = "an E or G card";
 x3::rule<current_controlled_card_id, ast::CurrentControlled> const current_controlled_card = "an F or H card";
+x3::rule<polynomial_card_id, ast::Polynomial> const polynomial_card = "an E, F, G or H card with POLY";
 x3::rule<behavioral_card_id, ast::Behavioral> const behavioral_card = "a B card";
 x3::rule<diode_card_id, ast::Diode> const diode_card = "a D card";
 x3::rule<voltage_switch_card_id, ast::VoltageSwitch> const voltage_switch_card = "an S card";
@@ -482,6 +484,8 @@ x3::rule<class waveform_values_id, std::vector<ExpressionPtr>> const waveform_va
 x3::rule<class dc_word_id, ast::Word> const dc_word = "dc";
 x3::rule<class ac_word_id, ast::Word> const ac_word = "ac";
 x3::rule<class quantity_id, ast::Word> const quantity = "V= or I=";
+x3::rule<class polynomial_arguments_id, std::vector<ast::Word>> const polynomial_arguments =
+    "a control or a coefficient";
 x3::rule<class switch_state_id, ast::Word> const switch_state = "on or off";
 x3::rule<class instance_node_id, ast::Word> const instance_node = "a node name";
 x3::rule<class instance_nodes_id, std::vector<ast::Word>> const instance_nodes = "a node name";
@@ -510,6 +514,11 @@ auto const voltage_controlled_card_def =
     element_name > node > node > node > node > value > end_of_card;
 auto const current_controlled_card_def =
     element_name > node > node > source_name > value > end_of_card;
+// A control pair may stand in parentheses, "(a, 0)", as ngspice takes it.
+auto const polynomial_arguments_def =
+    +(((lit('(') > node > -lit(',') > node > closing_paren) | node) >> -lit(','));
+auto const polynomial_card_def = element_name > node > node > keyword("poly") > '(' > unsigned_number >
+                                 closing_paren > polynomial_arguments > end_of_card;
 auto const quantity_def = x3::raw[keyword("v") | keyword("i")][make_word];
 auto const behavioral_card_def =
     element_name > node > node > quantity > '=' > expression > end_of_card;
@@ -593,7 +602,8 @@ BOOST_SPIRIT_DEFINE(minus_token, not_token, voltage_open, current_open)
 BOOST_SPIRIT_DEFINE(unary, power, primary, node_voltage, branch_current, call, arguments,
                     closing_paren, assignment, parameter, params_keyword, two_terminal_card,
                     coupling_card, source_card, voltage_controlled_card, current_controlled_card,
-                    behavioral_card, diode_card, voltage_switch_card, current_switch_card)
+                    behavioral_card, diode_card, voltage_switch_card, current_switch_card,
+                    polynomial_card, polynomial_arguments)
 BOOST_SPIRIT_DEFINE(instance_card, source_spec, waveform_spec, dc_spec, ac_spec, bare_spec,
                     waveform_kind, waveform_arguments, waveform_values, parenthesized_waveform,
                     bare_waveform, dc_word, ac_word, quantity, switch_state, instance_node, instance_nodes,

@@ -97,6 +97,16 @@ std::vector<std::string> words_of(const std::string& text) {
   return words;
 }
 
+// E F G H with POLY(n) in place of their controls: "E1 out 0 POLY(2) a 0 b 0 0 1 1".
+bool is_polynomial_card(const std::string& text) {
+  const std::vector<std::string> words = words_of(text);
+  if (words.size() < 4) return false;
+  std::string word = words[3];
+  for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return word.starts_with("poly") &&
+         (word.size() > 4 ? word[4] == '(' : words.size() > 4 && words[4].starts_with("("));
+}
+
 struct WaveformShape {
   const char* name;
   std::size_t min_args, max_args;
@@ -219,9 +229,11 @@ class Parser {
       }
       case 'e':
       case 'g':
+        if (is_polynomial_card(text)) return parse_as<ast::Polynomial>(parser::polynomial_card, line, where);
         return parse_as<ast::VoltageControlled>(parser::voltage_controlled_card, line, where);
       case 'f':
       case 'h':
+        if (is_polynomial_card(text)) return parse_as<ast::Polynomial>(parser::polynomial_card, line, where);
         return parse_as<ast::CurrentControlled>(parser::current_controlled_card, line, where);
       case 'b':
         return parse_as<ast::Behavioral>(parser::behavioral_card, line, where);

@@ -81,6 +81,12 @@ struct CardPrinter {
     line(fmt::format("{} {} {} {} {}", c.name.text, c.positive.text, c.negative.text,
                      c.control.text, value(c.gain)));
   }
+  void operator()(const ast::Polynomial& c) {
+    std::vector<std::string> arguments;
+    for (const ast::Word& word : c.arguments) arguments.push_back(word.text);
+    line(fmt::format("{} {} {} poly({}) {}", c.name.text, c.positive.text, c.negative.text, value(c.dimension),
+                     fmt::join(arguments, " ")));
+  }
   void operator()(const ast::Behavioral& c) {
     line(fmt::format("{} {} {} {}={{{}}}", c.name.text, c.positive.text, c.negative.text,
                      c.quantity.text, print(*c.expression)));

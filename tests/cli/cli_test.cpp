@@ -272,6 +272,45 @@ TEST_F(Cli, GridAddsInterpolatedRowsOnTheTstepGrid) {
   EXPECT_GT(csv.rows.size(), steps.rows.size());
 }
 
+// E G F H with POLY: SPICE's order of the terms (p0, then x1 .. xn, then x1^2, x1 x2, ..., then the
+// cubes), the voltages or the controlling sources' currents in the closed form at every row. The
+// same netlist in ngspice 38 writes these values (v(e2) = -20, v(g1) = -2, v(h1) = 3.4375 and
+// v(f1) = -437.5 at t = 0).
+TEST_F(Cli, PolynomialControlledSourcesFollowSpicesTermOrder) {
+  const std::string netlist =
+      "* poly\n"
+      "Va a 0 PWL(0 -2 1 3)\n"
+      "Ra a 0 2\n"
+      "Vb b 0 PWL(0 1 1 -1)\n"
+      "Rb b 0 4\n"
+      "E1 e1 0 POLY(1) a 0 0.5 2 0.25\n"
+      "R1 e1 0 1k\n"
+      "E2 e2 0 POLY(2) (a, 0) (b, 0) 1 2 3 4 5 6 7 8 9 10\n"
+      "R2 e2 0 1k\n"
+      "G1 0 g1 poly(2) a 0 b 0 0 1m 2m 0 1m\n"
+      "R3 g1 0 1k\n"
+      "H1 h1 0 POLY(2) Va Vb 0.5 1 1 2 0 3\n"
+      "R4 h1 0 1k\n"
+      "F1 0 f1 POLY(1) Vb 0 2 1\n"
+      "R5 f1 0 1k\n"
+      ".tran 0.1 1\n"
+      ".end\n";
+  const Result r = run(write("poly.cir", netlist) + " --rtol 1e-9 --probe \"v(e1),v(e2),v(g1),v(h1),v(f1)\"");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv csv = parse_csv(r.out);
+  ASSERT_GE(csv.rows.size(), 2u);
+  for (const auto& row : csv.rows) {
+    const double t = row[0], a = -2 + 5 * t, b = 1 - 2 * t;
+    const double ia = -a / 2, ib = -b / 4;  // into each source's + terminal
+    EXPECT_NEAR(row[1], 0.5 + 2 * a + 0.25 * a * a, 1e-6) << "t = " << t;
+    EXPECT_NEAR(row[2], 1 + 2 * a + 3 * b + 4 * a * a + 5 * a * b + 6 * b * b + 7 * a * a * a + 8 * a * a * b +
+                            9 * a * b * b + 10 * b * b * b, 1e-6) << "t = " << t;
+    EXPECT_NEAR(row[3], 1e3 * (1e-3 * a + 2e-3 * b + 1e-3 * a * b), 1e-6) << "t = " << t;
+    EXPECT_NEAR(row[4], 0.5 + ia + ib + 2 * ia * ia + 3 * ib * ib, 1e-6) << "t = " << t;
+    EXPECT_NEAR(row[5], 1e3 * (2 * ib + ib * ib), 1e-6) << "t = " << t;
+  }
+}
+
 // A lossless 1 Hz LC tank, 1,000 periods: with .options method=trap the amplitude
 // sqrt(v^2 + (L/C) i^2) stays 1; --method gear (BDF) overrides it and damps.
 TEST_F(Cli, TrapezoidalMethodKeepsAnLcTanksAmplitude) {

@@ -37,6 +37,11 @@ const Malformed malformed[] = {
     {"t\nV1 a 0 sin(0 1 2 3 4 5 6)\n", 2, 8, "sin takes 2 to 6 values, not 7"},
     {"t\nV1 a 0 pwl(0 0 1)\n", 2, 8, "pwl takes time-value pairs, not 3 values"},
     {"t\nV1 a 0 dc 1 2\n", 2, 13, "a second DC value for v1"},
+    {"t\nE1 a 0 poly(2) b 0 c 0\n", 2, 1, "poly(2) needs 4 control nodes and at least one coefficient"},
+    {"t\nF1 a 0 poly(1) v1\n", 2, 1, "poly(1) needs 1 voltage source and at least one coefficient"},
+    {"t\nE1 a 0 poly(1) b 0 1 x\n", 2, 22, "expected a poly coefficient, not 'x'"},
+    {"t\nG1 a 0 poly(0) b 0 1\n", 2, 13, "poly() takes a whole number of controls from 1 to 16"},
+    {"t\nE1 a 0 poly(1) (b 0 1\n", 2, 21, "expected ')'"},
     {"t\nV1 a 0 sin(0 1 1k) pulse(0 1)\n", 2, 20, "a second waveform for v1"},
     {"t\nV1 a 0 sin(0 1 1k) td=1\n", 2, 20, "unknown sin parameter 'td'"},
     // expressions

@@ -174,6 +174,12 @@ TEST(Elaborate, SourcesAndControlledSources) {
   EXPECT_EQ(element(circuit, "i1").source.dc, 1e-3);
   EXPECT_EQ(element(circuit, "i2").source.dc, 0.0);
   EXPECT_EQ(element(circuit, "i2").source.waveform->args, (std::vector<double>{0, 0, 1e-9, 1e-3}));
+  // POLY: a B source of SPICE's polynomial, zero coefficients left out.
+  EXPECT_EQ(element(circuit, "e2").kind, ElementKind::behavioral);
+  EXPECT_TRUE(element(circuit, "e2").behavioral_is_voltage);
+  EXPECT_EQ(netlist::print(*element(circuit, "e2").expression), "(1 + (3 * v(b,0)))");
+  EXPECT_EQ(element(circuit, "h2").kind, ElementKind::behavioral);
+  EXPECT_EQ(netlist::print(*element(circuit, "h2").expression), "((2 * i(v1)) * i(v1))");
   EXPECT_EQ(element(circuit, "e1").nodes, (std::vector<std::string>{"h", "0", "a", "0"}));
   EXPECT_EQ(element(circuit, "e1").value, 2.0);
   EXPECT_EQ(element(circuit, "g1").value, 1e-3);

@@ -322,6 +322,7 @@ struct source_card_id : card_error_handler {};
 struct voltage_controlled_card_id : card_error_handler {};
 struct current_controlled_card_id : card_error_handler {};
 struct polynomial_card_id : card_error_handler {};
+struct expression_controlled_card_id : card_error_handler {};
 struct behavioral_card_id : card_error_handler {};
 struct diode_card_id : card_error_handler {};
 struct voltage_switch_card_id : card_error_handler {};
@@ -466,6 +467,8 @@ x3::rule<voltage_controlled_card_id, ast::VoltageControlled> const voltage_contr
 x3::rule<current_controlled_card_id, ast::CurrentControlled> const current_controlled_card = "an F or H card";
 x3::rule<polynomial_card_id, ast::Polynomial> const polynomial_card = "an E, F, G or H card with POLY";
 x3::rule<behavioral_card_id, ast::Behavioral> const behavioral_card = "a B card";
+x3::rule<expression_controlled_card_id, ast::Behavioral> const expression_controlled_card =
+    "an E or G card with an expression";
 x3::rule<diode_card_id, ast::Diode> const diode_card = "a D card";
 x3::rule<voltage_switch_card_id, ast::VoltageSwitch> const voltage_switch_card = "an S card";
 x3::rule<current_switch_card_id, ast::CurrentSwitch> const current_switch_card = "a W card";
@@ -484,6 +487,7 @@ x3::rule<class waveform_values_id, std::vector<ExpressionPtr>> const waveform_va
 x3::rule<class dc_word_id, ast::Word> const dc_word = "dc";
 x3::rule<class ac_word_id, ast::Word> const ac_word = "ac";
 x3::rule<class quantity_id, ast::Word> const quantity = "V= or I=";
+x3::rule<class controlled_quantity_id, ast::Word> const controlled_quantity = "vol=, cur= or value=";
 x3::rule<class polynomial_arguments_id, std::vector<ast::Word>> const polynomial_arguments =
     "a control or a coefficient";
 x3::rule<class switch_state_id, ast::Word> const switch_state = "on or off";
@@ -522,6 +526,10 @@ auto const polynomial_card_def = element_name > node > node > keyword("poly") > 
 auto const quantity_def = x3::raw[keyword("v") | keyword("i")][make_word];
 auto const behavioral_card_def =
     element_name > node > node > quantity > '=' > expression > end_of_card;
+// ngspice's E and G with an expression: "E1 out 0 vol='2*v(a)'", "G1 0 out cur={...}", "value=".
+auto const controlled_quantity_def = x3::raw[keyword("vol") | keyword("cur") | keyword("value")][make_word];
+auto const expression_controlled_card_def =
+    element_name > node > node > controlled_quantity > '=' > expression > end_of_card;
 auto const diode_card_def = element_name > node > node > model_name > -value >
                             x3::matches[keyword("off")] > *assignment > end_of_card;
 auto const switch_state_def = x3::raw[keyword("on") | keyword("off")][make_word];
@@ -603,7 +611,8 @@ BOOST_SPIRIT_DEFINE(unary, power, primary, node_voltage, branch_current, call, a
                     closing_paren, assignment, parameter, params_keyword, two_terminal_card,
                     coupling_card, source_card, voltage_controlled_card, current_controlled_card,
                     behavioral_card, diode_card, voltage_switch_card, current_switch_card,
-                    polynomial_card, polynomial_arguments)
+                    polynomial_card, polynomial_arguments, expression_controlled_card,
+                    controlled_quantity)
 BOOST_SPIRIT_DEFINE(instance_card, source_spec, waveform_spec, dc_spec, ac_spec, bare_spec,
                     waveform_kind, waveform_arguments, waveform_values, parenthesized_waveform,
                     bare_waveform, dc_word, ac_word, quantity, switch_state, instance_node, instance_nodes,

@@ -107,6 +107,17 @@ bool is_polynomial_card(const std::string& text) {
          (word.size() > 4 ? word[4] == '(' : words.size() > 4 && words[4].starts_with("("));
 }
 
+// E G with vol=, cur= or value= in place of their controls.
+bool is_expression_card(const std::string& text) {
+  const std::vector<std::string> words = words_of(text);
+  if (words.size() < 4) return false;
+  std::string word = words[3];
+  for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string keyword = word.substr(0, word.find('='));
+  return (keyword == "vol" || keyword == "cur" || keyword == "value") &&
+         (keyword.size() < word.size() || (words.size() > 4 && words[4].starts_with("=")));
+}
+
 struct WaveformShape {
   const char* name;
   std::size_t min_args, max_args;
@@ -230,6 +241,11 @@ class Parser {
       case 'e':
       case 'g':
         if (is_polynomial_card(text)) return parse_as<ast::Polynomial>(parser::polynomial_card, line, where);
+        if (is_expression_card(text)) {
+          Parsed parsed = parse_as<ast::Behavioral>(parser::expression_controlled_card, line, where);
+          if (parsed.card && !as_behavioral(std::get<ast::Behavioral>(parsed.card->node))) parsed.card.reset();
+          return parsed;
+        }
         return parse_as<ast::VoltageControlled>(parser::voltage_controlled_card, line, where);
       case 'f':
       case 'h':
@@ -264,6 +280,19 @@ class Parser {
   }
 
   // Waveform arity, one waveform and one DC value per source, r= and td= only for pwl.
+  // An E card's vol= or value= is a B source's v=, a G card's cur= or value= its i=.
+  bool as_behavioral(ast::Behavioral& card) {
+    const bool voltage = card.name.text[0] == 'e';
+    const std::string& quantity = card.quantity.text;
+    if (quantity == (voltage ? "cur" : "vol")) {
+      diagnostics_.error(card.quantity.where, std::string(voltage ? "an E source takes vol= or value=, not cur="
+                                                                  : "a G source takes cur= or value=, not vol="));
+      return false;
+    }
+    card.quantity.text = voltage ? "v" : "i";
+    return true;
+  }
+
   bool check_source(const ast::IndependentSource& source) {
     bool valid = true;
     const ast::SourceSpec* waveform = nullptr;

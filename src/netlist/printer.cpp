@@ -88,8 +88,11 @@ struct CardPrinter {
                      fmt::join(arguments, " ")));
   }
   void operator()(const ast::Behavioral& c) {
-    line(fmt::format("{} {} {} {}={{{}}}", c.name.text, c.positive.text, c.negative.text,
-                     c.quantity.text, print(*c.expression)));
+    // An E or G card written with an expression reads back as one: vol= or cur=.
+    const char letter = c.name.text[0];
+    const std::string quantity = letter == 'b' ? c.quantity.text : c.quantity.text == "v" ? "vol" : "cur";
+    line(fmt::format("{} {} {} {}={{{}}}", c.name.text, c.positive.text, c.negative.text, quantity,
+                     print(*c.expression)));
   }
   void operator()(const ast::Diode& c) {
     line(fmt::format("{} {} {} {}{}{}{}", c.name.text, c.anode.text, c.cathode.text, c.model.text,

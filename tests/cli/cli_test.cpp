@@ -311,6 +311,36 @@ TEST_F(Cli, PolynomialControlledSourcesFollowSpicesTermOrder) {
   }
 }
 
+// ngspice's E and G with an expression (vol=, cur=, value=, quoted or braced): B sources. The
+// same netlist in ngspice 38 writes v(e1) = -3, v(g1) = -2 and v(e2) = v(e3) = -6 at t = 0.
+TEST_F(Cli, ExpressionControlledSourcesAreBehavioralSources) {
+  const std::string netlist =
+      "* vol= cur= value=\n"
+      "Va a 0 PWL(0 -2 1 3)\n"
+      "Ra a 0 2\n"
+      "E1 e1 0 vol='v(a)*2+1'\n"
+      "R1 e1 0 1k\n"
+      "G1 0 g1 cur='v(a)*1m'\n"
+      "R2 g1 0 1k\n"
+      "E2 e2 0 value={v(a)*3}\n"
+      "R3 e2 0 1k\n"
+      "G2 0 g2 value = {v(a)*v(a)*1m}\n"
+      "R4 g2 0 1k\n"
+      ".tran 0.1 1\n"
+      ".end\n";
+  const Result r = run(write("expression.cir", netlist) + " --rtol 1e-9 --probe \"v(e1),v(g1),v(e2),v(g2)\"");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv csv = parse_csv(r.out);
+  ASSERT_GE(csv.rows.size(), 2u);
+  for (const auto& row : csv.rows) {
+    const double t = row[0], a = -2 + 5 * t;
+    EXPECT_NEAR(row[1], 2 * a + 1, 1e-6) << "t = " << t;
+    EXPECT_NEAR(row[2], a, 1e-6) << "t = " << t;
+    EXPECT_NEAR(row[3], 3 * a, 1e-6) << "t = " << t;
+    EXPECT_NEAR(row[4], a * a, 1e-6) << "t = " << t;
+  }
+}
+
 // A lossless 1 Hz LC tank, 1,000 periods: with .options method=trap the amplitude
 // sqrt(v^2 + (L/C) i^2) stays 1; --method gear (BDF) overrides it and damps.
 TEST_F(Cli, TrapezoidalMethodKeepsAnLcTanksAmplitude) {

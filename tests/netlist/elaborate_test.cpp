@@ -180,6 +180,13 @@ TEST(Elaborate, SourcesAndControlledSources) {
   EXPECT_EQ(netlist::print(*element(circuit, "e2").expression), "(1 + (3 * v(b,0)))");
   EXPECT_EQ(element(circuit, "h2").kind, ElementKind::behavioral);
   EXPECT_EQ(netlist::print(*element(circuit, "h2").expression), "((2 * i(v1)) * i(v1))");
+  // vol=, cur=, value=: B sources too.
+  EXPECT_EQ(element(circuit, "e3").kind, ElementKind::behavioral);
+  EXPECT_TRUE(element(circuit, "e3").behavioral_is_voltage);
+  EXPECT_EQ(netlist::print(*element(circuit, "e3").expression), "(2 * v(a))");
+  EXPECT_EQ(element(circuit, "g2").kind, ElementKind::behavioral);
+  EXPECT_FALSE(element(circuit, "g2").behavioral_is_voltage);
+  EXPECT_EQ(element(circuit, "g2").nodes, (std::vector<std::string>{"0", "u"}));
   EXPECT_EQ(element(circuit, "e1").nodes, (std::vector<std::string>{"h", "0", "a", "0"}));
   EXPECT_EQ(element(circuit, "e1").value, 2.0);
   EXPECT_EQ(element(circuit, "g1").value, 1e-3);

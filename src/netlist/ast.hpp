@@ -175,6 +175,12 @@ struct OutputCard {
   std::vector<OutputItem> items;
 };
 
+// .global n1 n2 ...: nodes that subcircuits share with the top level instead of their own.
+struct GlobalCard {
+  Word directive;
+  std::vector<Word> nodes;
+};
+
 struct TempCard {
   Word directive;
   ExpressionPtr value;
@@ -195,7 +201,7 @@ struct IgnoredCard {
 struct Card {
   std::variant<TwoTerminal, Coupling, IndependentSource, VoltageControlled, CurrentControlled,
                Polynomial, Behavioral, Diode, VoltageSwitch, CurrentSwitch, Instance, ParamCard, ModelCard,
-               Subcircuit, Include, TranCard, NodeValuesCard, OptionsCard, OutputCard, TempCard,
+               Subcircuit, Include, TranCard, NodeValuesCard, OptionsCard, OutputCard, TempCard, GlobalCard,
                TitleCard, IgnoredCard>
       node;
   SourceRange where;  // the card's first token

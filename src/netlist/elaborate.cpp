@@ -6,7 +6,7 @@
 // Which ignored cards are errors: an analysis padsim does not run (.ac .dc .op .noise ...) is
 // only a warning when the netlist has a .tran (the transient result is what was asked for);
 // without a .tran it is an error. Output-only cards (.plot .four .meas ...) and unknown dot
-// cards are warnings. Cards that would change the circuit (.global .func .if ...) were
+// cards are warnings. Cards that would change the circuit (.func .if ...) were
 // rejected by the parser.
 #include <algorithm>
 #include <cmath>
@@ -261,10 +261,12 @@ struct Instance {
   std::unordered_map<std::string, std::string> ports;  // subcircuit port -> connected node
   const Scope* scope;
   const Definitions* definitions;
+  const std::set<std::string>* global_nodes = nullptr;  // .global nodes, not the instance's own (set for each)
 
   std::string node(const std::string& name) const {
     if (name == "0" || name == "gnd") return "0";
     if (auto port = ports.find(name); port != ports.end()) return port->second;
+    if (global_nodes->contains(name)) return name;
     return prefix + name;
   }
   std::string element(const std::string& name) const { return prefix + name; }
@@ -286,7 +288,11 @@ class Elaborator {
     if (!Hierarchy(diagnostics_, max_cards_).check(cards)) return std::nullopt;
     Scope global;
     Definitions definitions;
-    Instance top{"", {}, &global, &definitions};
+    // Global nodes hold for every instance, wherever the .global card stands at the top level.
+    for (const ast::Card* card : cards)
+      if (const auto* globals = std::get_if<ast::GlobalCard>(&card->node))
+        for (const ast::Word& node : globals->nodes) global_nodes_.insert(node.text);
+    Instance top{"", {}, &global, &definitions, &global_nodes_};
     elaborate_body(cards, top, global, definitions);
     check_references();
     for (const Diagnostic& diagnostic : diagnostics_.all())
@@ -835,6 +841,7 @@ class Elaborator {
     }
     Instance inner;
     inner.prefix = instance.element(card.name.text) + ".";
+    inner.global_nodes = instance.global_nodes;
     for (std::size_t i = 0; i < card.nodes.size(); ++i)
       inner.ports[subcircuit->ports[i].text] = instance.node(card.nodes[i].text);
 
@@ -953,6 +960,10 @@ class Elaborator {
     }
   }
 
+  void elaborate_card(const ast::GlobalCard&, const ast::Card& whole, const Instance& instance) {
+    at_top_level(whole, instance, ".global");  // gathered in run()
+  }
+
   void elaborate_card(const ast::TempCard& card, const ast::Card& whole, const Instance& instance) {
     if (!at_top_level(whole, instance, ".temp")) return;
     circuit_.temperature = value(card.value, *instance.scope);
@@ -1002,6 +1013,7 @@ class Elaborator {
 
   Diagnostics& diagnostics_;
   FlatCircuit circuit_;
+  std::set<std::string> global_nodes_;
   std::size_t max_cards_;
   bool has_tran_ = false;
   std::unordered_map<std::string, std::size_t> element_index_;

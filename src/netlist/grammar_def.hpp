@@ -338,6 +338,7 @@ struct node_values_card_id : card_error_handler {};
 struct options_card_id : card_error_handler {};
 struct output_card_id : card_error_handler {};
 struct temp_card_id : card_error_handler {};
+struct global_card_id : card_error_handler {};
 
 // Node and element names: anything up to a blank or one of = ( ) , { } ' ".
 auto const name_char = ~x3::char_(" \t\r\n=(),{}'\"");
@@ -554,6 +555,7 @@ x3::rule<node_values_card_id, ast::NodeValuesCard> const node_values_card = "an 
 x3::rule<options_card_id, ast::OptionsCard> const options_card = "an .options card";
 x3::rule<output_card_id, ast::OutputCard> const output_card = "a .save card";
 x3::rule<temp_card_id, ast::TempCard> const temp_card = "a .temp card";
+x3::rule<global_card_id, ast::GlobalCard> const global_card = "a .global card";
 
 x3::rule<class parameters_id, std::vector<ast::Assignment>> const parameters = "name=value";
 x3::rule<class model_type_id, ast::Word> const model_type = "a model type";
@@ -600,6 +602,7 @@ auto const output_word_def = x3::attr(ast::Word{}) >> x3::repeat(1)[node];
 auto const output_item_def = output_call | output_word;
 auto const output_card_def = directive > *output_item > end_of_card;
 auto const temp_card_def = directive > value > end_of_card;
+auto const global_card_def = directive > +node > end_of_card;
 
 // In several groups: the preprocessor takes at most 64 arguments per macro.
 BOOST_SPIRIT_DEFINE(node, element_name, model_name, source_name, inductor_name, subcircuit_name,
@@ -618,7 +621,7 @@ BOOST_SPIRIT_DEFINE(instance_card, source_spec, waveform_spec, dc_spec, ac_spec,
                     bare_waveform, dc_word, ac_word, quantity, switch_state, instance_node, instance_nodes,
                     param_card, model_card, subckt_card, ends_card, include_card, tran_card,
                     node_values_card, options_card)
-BOOST_SPIRIT_DEFINE(output_card, temp_card, parameters, model_type, model_parameters, port,
+BOOST_SPIRIT_DEFINE(output_card, temp_card, global_card, parameters, model_type, model_parameters, port,
                     node_assignment, node_assignments, option_item, option_value, output_item,
                     output_call, output_word, node_list, output_function, section)
 

@@ -75,7 +75,7 @@ bool parse_card_with(const Rule& rule, Attribute& attribute, const LogicalLine& 
 
 // Dot cards whose meaning padsim would change by ignoring them.
 bool is_unsupported_directive(const std::string& directive) {
-  static const char* const unsupported[] = {"global", "func", "if", "elseif", "else", "endif",
+  static const char* const unsupported[] = {"func", "if", "elseif", "else", "endif",
                                             "step", "connect", "alter", "model_file"};
   for (const char* name : unsupported)
     if (directive == name) return true;
@@ -379,6 +379,7 @@ class Parser {
     if (directive == "save" || directive == "print" || directive == "probe")
       return parse_as<ast::OutputCard>(parser::output_card, line, where);
     if (directive == "temp") return parse_as<ast::TempCard>(parser::temp_card, line, where);
+    if (directive == "global") return parse_as<ast::GlobalCard>(parser::global_card, line, where);
     Parsed parsed;
     parsed.where = where;
     if (directive == "title") {

@@ -167,6 +167,11 @@ struct CardPrinter {
     line(text);
   }
   void operator()(const ast::TempCard& c) { line(".temp " + value(c.value)); }
+  void operator()(const ast::GlobalCard& c) {
+    std::string text = ".global";
+    for (const ast::Word& node : c.nodes) text += " " + node.text;
+    line(text);
+  }
   void operator()(const ast::TitleCard& c) { line(".title " + c.text); }
   void operator()(const ast::IgnoredCard& c) { line(c.text); }
 };

@@ -60,7 +60,6 @@ const Malformed malformed[] = {
     {"t\n.param 1x=2\n", 2, 8, "expected name=value"},
     {"t\n.lib models.lib\n", 2, 16, "expected a library section name"},
     {"t\n.include nofile.cir\n", 2, 10, "cannot read 'nofile.cir'"},
-    {"t\n.global vdd\n", 2, 1, ".global is not supported by padsim"},
     {"t\n.control\nrun\n", 2, 1, ".control without .endc"},
     {"t\n.subckt s a b\nR1 a b 1\n", 2, 9, "missing .ends for subcircuit 's'"},
     {"t\n.ends\n", 2, 1, ".ends without .subckt"},

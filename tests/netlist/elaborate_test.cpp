@@ -115,6 +115,25 @@ TEST(Elaborate, SubcircuitsFlattenWithHierarchicalNames) {
   EXPECT_EQ(circuit.tran->stop, 1e-6);
 }
 
+TEST(Elaborate, GlobalNodesAreSharedByEveryInstance) {
+  // ngspice: a .global node inside a subcircuit is the top level's, whichever instance uses it
+  // (two dividers from one vdd: 3 V each, 6 mA from the source).
+  FlatCircuit circuit = elaborate_text(
+      "t\n"
+      ".subckt half out\n"
+      "R1 vdd out 1k\n"
+      "R2 out local 1k\n"
+      "R3 local 0 1\n"
+      ".ends\n"
+      "X1 o1 half\n"
+      "X2 o2 half\n"
+      "Vdd vdd 0 6\n"
+      ".global vdd\n");
+  EXPECT_EQ(element(circuit, "x1.r1").nodes, (std::vector<std::string>{"vdd", "o1"}));
+  EXPECT_EQ(element(circuit, "x2.r1").nodes, (std::vector<std::string>{"vdd", "o2"}));
+  EXPECT_EQ(element(circuit, "x2.r2").nodes, (std::vector<std::string>{"o2", "x2.local"}));
+}
+
 TEST(Elaborate, SubcircuitReferencesBecomeHierarchical) {
   FlatCircuit circuit = elaborate_text(
       "t\n"

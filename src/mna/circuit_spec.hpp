@@ -16,7 +16,7 @@ namespace mna {
 // A transient source function with ngspice's parameters in ngspice's order; omitted trailing
 // parameters take ngspice's defaults (some depend on TSTEP and TSTOP, see waveform.hpp).
 struct Waveform {
-  enum class Shape { constant, pulse, sine, exponential, piecewise_linear };
+  enum class Shape { constant, pulse, sine, exponential, frequency_modulated, piecewise_linear };
   Waveform() = default;
   Waveform(Shape shape_of, std::vector<double> parameters_of, std::optional<double> repeat_from_of = std::nullopt)
       : shape(shape_of), parameters(std::move(parameters_of)), repeat_from(repeat_from_of) {}

@@ -14,6 +14,7 @@ Waveform waveform_from(const netlist::Waveform& w) {
     case Kind::pulse: out.shape = Waveform::Shape::pulse; break;
     case Kind::sin: out.shape = Waveform::Shape::sine; break;
     case Kind::exp: out.shape = Waveform::Shape::exponential; break;
+    case Kind::sffm: out.shape = Waveform::Shape::frequency_modulated; break;
     case Kind::pwl:
       out.shape = Waveform::Shape::piecewise_linear;
       out.repeat_from = w.repeat_from;

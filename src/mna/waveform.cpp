@@ -48,6 +48,15 @@ std::vector<double> with_defaults(Waveform::Shape shape, std::vector<double> p, 
       if (!given(4) || p[4] == 0) p[4] = p[2] + tstep;
       if (!given(5) || p[5] == 0) p[5] = tstep;
       break;
+    case Waveform::Shape::frequency_modulated:
+      // SFFM(VO VA FC MDI FS PHASEC PHASES), phases in degrees (ngspice 38); FC and FS 1/TSTOP
+      // when omitted or zero.
+      fill(7, 2);
+      for (int i : {2, 4})
+        if (!given(i) || p[i] == 0) p[i] = run.tstop > 0 ? 1 / run.tstop : 0;
+      for (int i : {3, 5, 6})
+        if (!given(i)) p[i] = 0;
+      break;
     case Waveform::Shape::piecewise_linear:
       if (p.size() < 2 || p.size() % 2 != 0)
         throw ModelError("element '" + element + "': PWL needs time-value pairs");
@@ -124,6 +133,11 @@ double SourceFunction::value(double t) const {
       if (t > td2) v += (v1 - v2) * (1 - std::exp(-(t - td2) / tau2));
       return v;
     }
+    case Waveform::Shape::frequency_modulated: {
+      const double vo = p_[0], va = p_[1], fc = p_[2], mdi = p_[3], fs = p_[4];
+      const double phase_carrier = p_[5] * pi / 180, phase_signal = p_[6] * pi / 180;
+      return vo + va * std::sin(2 * pi * fc * t + phase_carrier + mdi * std::sin(2 * pi * fs * t + phase_signal));
+    }
     case Waveform::Shape::piecewise_linear: return pwl_value(t);
   }
   return dc_;
@@ -185,7 +199,10 @@ double SourceFunction::pwl_next_corner(double t) const {
 }
 
 double SourceFunction::resolution_step() const {
-  return shape_ == Waveform::Shape::sine && p_[2] > 0 ? 1 / (20 * p_[2]) : infinity;
+  if (shape_ == Waveform::Shape::sine && p_[2] > 0) return 1 / (20 * p_[2]);
+  // An SFFM's instantaneous frequency reaches FC + MDI FS.
+  const double highest = shape_ == Waveform::Shape::frequency_modulated ? p_[2] + std::abs(p_[3]) * p_[4] : 0;
+  return highest > 0 ? 1 / (20 * highest) : infinity;
 }
 
 double SourceFunction::next_corner(double t) const {
@@ -207,6 +224,7 @@ double SourceFunction::next_corner(double t) const {
     case Waveform::Shape::exponential:
       if (p_[2] > t) return p_[2];
       return p_[4] > t ? p_[4] : infinity;
+    case Waveform::Shape::frequency_modulated: return infinity;
     case Waveform::Shape::piecewise_linear: return pwl_next_corner(t);
   }
   return infinity;

@@ -1,5 +1,5 @@
 // Independent-source time functions with ngspice's semantics and defaults: PULSE, SIN, EXP,
-// PWL. Each also lists its corners, the instants where it is not smooth, which the integrator
+// SFFM, PWL. Each also lists its corners, the instants where it is not smooth, which the integrator
 // must hit exactly.
 #pragma once
 
@@ -20,8 +20,8 @@ class SourceFunction {
   double value(double t) const;
   // First corner strictly after t, or +infinity.
   double next_corner(double t) const;
-  // The longest step that still resolves the function: a twentieth of a sine's period
-  // (+infinity for the others, whose corners are time events and which are linear or
+  // The longest step that still resolves the function: a twentieth of a sine's period, or of an
+  // SFFM's shortest (+infinity for the others, whose corners are time events and which are linear or
   // monotone in between).
   double resolution_step() const;
 

@@ -41,7 +41,7 @@ struct Coupling {
   ExpressionPtr value;
 };
 
-// One specification of an independent source: kind "dc", "ac", "pulse", "sin", "exp", "pwl",
+// One specification of an independent source: kind "dc", "ac", "pulse", "sin", "exp", "sffm", "pwl",
 // or empty for a bare DC value. `options` are pwl's r= and td=.
 struct SourceSpec {
   Word kind;

@@ -35,7 +35,7 @@ enum class ElementKind : char {
   current_switch = 'w',
 };
 
-enum class WaveformKind { pulse, sin, exp, pwl };
+enum class WaveformKind { pulse, sin, exp, sffm, pwl };
 
 // A transient waveform with its arguments as written, in ngspice's order; omitted trailing
 // arguments are absent (their defaults depend on .tran, so the consumer applies them):

@@ -619,6 +619,7 @@ class Elaborator {
       Waveform waveform{spec_kind == "pulse" ? WaveformKind::pulse
                         : spec_kind == "sin" ? WaveformKind::sin
                         : spec_kind == "exp" ? WaveformKind::exp
+                        : spec_kind == "sffm" ? WaveformKind::sffm
                                              : WaveformKind::pwl,
                         std::move(args), std::nullopt, std::nullopt, spec.kind.where};
       for (const ast::Assignment& option : spec.options) {

@@ -482,7 +482,7 @@ x3::rule<class bare_waveform_id, ast::SourceSpec> const bare_waveform = "a wavef
 x3::rule<class dc_spec_id, ast::SourceSpec> const dc_spec = "dc value";
 x3::rule<class ac_spec_id, ast::SourceSpec> const ac_spec = "ac magnitude";
 x3::rule<class bare_spec_id, ast::SourceSpec> const bare_spec = "a value";
-x3::rule<class waveform_kind_id, ast::Word> const waveform_kind = "pulse, sin, exp or pwl";
+x3::rule<class waveform_kind_id, ast::Word> const waveform_kind = "pulse, sin, exp, sffm or pwl";
 x3::rule<class waveform_arguments_id, std::vector<ExpressionPtr>> const waveform_arguments = "a value";
 x3::rule<class waveform_values_id, std::vector<ExpressionPtr>> const waveform_values = "a value";
 x3::rule<class dc_word_id, ast::Word> const dc_word = "dc";
@@ -500,7 +500,7 @@ auto const two_terminal_card_def =
 auto const coupling_card_def =
     element_name > inductor_name > inductor_name > value > end_of_card;
 auto const waveform_kind_def =
-    x3::raw[keyword("pulse") | keyword("sin") | keyword("exp") | keyword("pwl")][make_word];
+    x3::raw[keyword("pulse") | keyword("sin") | keyword("exp") | keyword("sffm") | keyword("pwl")][make_word];
 auto const dc_word_def = x3::raw[keyword("dc")][make_word];
 auto const ac_word_def = x3::raw[keyword("ac")][make_word];
 auto const waveform_spec_def = parenthesized_waveform | bare_waveform;

@@ -97,22 +97,28 @@ std::vector<std::string> words_of(const std::string& text) {
   return words;
 }
 
+// The words of a controlled source's card, lower case: what follows its two nodes tells its form.
+std::vector<std::string> lower_case_words_of(const std::string& text) {
+  std::vector<std::string> words = words_of(text);
+  for (std::string& word : words)
+    for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return words;
+}
+
 // E F G H with POLY(n) in place of their controls: "E1 out 0 POLY(2) a 0 b 0 0 1 1".
 bool is_polynomial_card(const std::string& text) {
-  const std::vector<std::string> words = words_of(text);
+  const std::vector<std::string> words = lower_case_words_of(text);
   if (words.size() < 4) return false;
-  std::string word = words[3];
-  for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string& word = words[3];
   return word.starts_with("poly") &&
          (word.size() > 4 ? word[4] == '(' : words.size() > 4 && words[4].starts_with("("));
 }
 
 // E G with vol=, cur= or value= in place of their controls.
 bool is_expression_card(const std::string& text) {
-  const std::vector<std::string> words = words_of(text);
+  const std::vector<std::string> words = lower_case_words_of(text);
   if (words.size() < 4) return false;
-  std::string word = words[3];
-  for (char& c : word) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string& word = words[3];
   const std::string keyword = word.substr(0, word.find('='));
   return (keyword == "vol" || keyword == "cur" || keyword == "value") &&
          (keyword.size() < word.size() || (words.size() > 4 && words[4].starts_with("=")));
@@ -126,7 +132,7 @@ struct WaveformShape {
 // ngspice's argument lists: pulse(v1 v2 td tr tf pw per np), sin(vo va freq td theta phase),
 // exp(v1 v2 td1 tau1 td2 tau2), pwl(t1 v1 ...).
 constexpr WaveformShape waveform_shapes[] = {
-    {"pulse", 2, 8}, {"sin", 2, 6}, {"exp", 2, 6}, {"pwl", 2, 1u << 30}};
+    {"pulse", 2, 8}, {"sin", 2, 6}, {"exp", 2, 6}, {"sffm", 2, 7}, {"pwl", 2, 1u << 30}};
 
 class Parser {
  public:

@@ -120,6 +120,24 @@ TEST(Waveform, SineWithDelayDampingAndPhase) {
   EXPECT_DOUBLE_EQ(f.resolution_step(), 1 / (20 * 1e3));  // a twentieth of the period
 }
 
+TEST(Waveform, FrequencyModulatedSineAsNgspice) {
+  // SFFM(VO VA FC MDI FS PHASEC PHASES), phases in degrees: ngspice 38 writes
+  // 0.5 + 2 sin(2 pi 10k t + PHASEC + 3 sin(2 pi 1k t + PHASES)) to within 5e-9 V.
+  using std::numbers::pi;
+  SourceFunction f({Shape::frequency_modulated, {0.5, 2, 10e3, 3, 1e3, 45, 30}}, 0, run, "v1");
+  for (double t : {0.0, 1.3e-5, 2.71e-4, 9.99e-4})
+    EXPECT_NEAR(f.value(t), 0.5 + 2 * std::sin(2 * pi * 10e3 * t + pi / 4 + 3 * std::sin(2 * pi * 1e3 * t + pi / 6)),
+                1e-12)
+        << "t = " << t;
+  EXPECT_EQ(f.next_corner(0), infinity);
+  EXPECT_DOUBLE_EQ(f.resolution_step(), 1 / (20 * (10e3 + 3 * 1e3)));  // the highest frequency
+  // FC and FS 1/TSTOP when omitted or zero, MDI 0 when omitted.
+  SourceFunction g({Shape::frequency_modulated, {0.1, 1, 0, 2}}, 0, run, "v2");
+  EXPECT_NEAR(g.value(0.3e-3), 0.1 + std::sin(2 * pi * 0.3 + 2 * std::sin(2 * pi * 0.3)), 1e-12);
+  SourceFunction h({Shape::frequency_modulated, {0, 1}}, 0, run, "v3");
+  EXPECT_NEAR(h.value(0.25e-3), 1, 1e-12);
+}
+
 TEST(Waveform, ExponentialRiseAndFall) {
   SourceFunction f({Shape::exponential, {0, 1, 1e-6, 2e-6, 5e-6, 1e-6}}, 0, run, "v1");
   EXPECT_DOUBLE_EQ(f.value(0.5e-6), 0);

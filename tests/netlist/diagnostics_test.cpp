@@ -35,6 +35,7 @@ const Malformed malformed[] = {
     {"t\nV1 a 0 pulse\n", 2, 13, "expected a value"},
     {"t\nV1 a 0 pulse 0\n", 2, 8, "pulse takes 2 to 8 values, not 1"},
     {"t\nV1 a 0 sin(0 1 2 3 4 5 6)\n", 2, 8, "sin takes 2 to 6 values, not 7"},
+    {"t\nV1 a 0 sffm 0 1 2 3 4 5 6 7\n", 2, 8, "sffm takes 2 to 7 values, not 8"},
     {"t\nV1 a 0 pwl(0 0 1)\n", 2, 8, "pwl takes time-value pairs, not 3 values"},
     {"t\nV1 a 0 dc 1 2\n", 2, 13, "a second DC value for v1"},
     {"t\nE1 a 0 cur={1}\n", 2, 8, "an E source takes vol= or value=, not cur="},

@@ -186,6 +186,8 @@ TEST(Elaborate, SourcesAndControlledSources) {
   EXPECT_EQ(element(circuit, "v7").source.waveform->args, (std::vector<double>{0.5, 1, 1e6}));
   EXPECT_EQ(element(circuit, "v8").source.waveform->args, (std::vector<double>{0, 0, 1e-6, 1}));
   EXPECT_EQ(element(circuit, "v8").source.waveform->delay, 0.5e-6);
+  EXPECT_EQ(element(circuit, "v10").source.waveform->kind, netlist::WaveformKind::sffm);
+  EXPECT_EQ(element(circuit, "v10").source.waveform->args, (std::vector<double>{0, 1, 1e4, 2, 1e3}));
   // Options inside the parentheses as well as after them, as ngspice reads them.
   EXPECT_EQ(element(circuit, "v9").source.waveform->repeat_from, 1e-6);
   EXPECT_EQ(element(circuit, "v9").source.waveform->delay, 0.5e-6);

@@ -678,6 +678,10 @@ class Elaborator {
     add(std::move(element));
   }
 
+  static ExpressionPtr expression_at(decltype(Expression::node) node, SourceRange where) {
+    return std::make_shared<const Expression>(Expression{std::move(node), where});
+  }
+
   // POLY(n): a B source of the polynomial in the n controls (node pairs' voltages for E G, the
   // currents of V sources for F H), with SPICE's order of the terms (polynomial_of).
   void elaborate_card(const ast::Polynomial& card, const ast::Card&, const Instance& instance) {
@@ -698,18 +702,15 @@ class Elaborator {
                                               " and at least one coefficient");
       return;
     }
-    auto make = [](decltype(Expression::node) node, SourceRange where) {
-      return std::make_shared<const Expression>(Expression{std::move(node), where});
-    };
     std::vector<ExpressionPtr> variables;
     for (std::size_t k = 0; k < controls; ++k) {
       if (current_controlled) {
         const ast::Word& source = card.arguments[k];
-        variables.push_back(make(BranchCurrent{source.text}, source.where));
+        variables.push_back(expression_at(BranchCurrent{source.text}, source.where));
       } else {
         const ast::Word& positive = card.arguments[2 * k];
         const ast::Word& negative = card.arguments[2 * k + 1];
-        variables.push_back(make(NodeVoltage{positive.text, negative.text}, positive.where));
+        variables.push_back(expression_at(NodeVoltage{positive.text, negative.text}, positive.where));
       }
     }
     std::vector<double> coefficients;
@@ -733,9 +734,7 @@ class Elaborator {
   // zero coefficients are left out.
   static ExpressionPtr polynomial_of(const std::vector<ExpressionPtr>& variables,
                                      const std::vector<double>& coefficients, SourceRange where) {
-    auto make = [&](decltype(Expression::node) node) {
-      return std::make_shared<const Expression>(Expression{std::move(node), where});
-    };
+    auto make = [&](decltype(Expression::node) node) { return expression_at(std::move(node), where); };
     ExpressionPtr sum;
     std::size_t next = 0;
     const std::size_t n = variables.size();

@@ -261,6 +261,7 @@ inline auto const make_waveform_spec = [](auto& context) {
   for (auto const& option : at_c<3>(_attr(context))) spec.options.push_back(option);
   _val(context) = std::move(spec);
 };
+
 inline auto const make_bare_spec = [](auto& context) {
   ast::SourceSpec spec;
   spec.kind.where = _attr(context)->where;

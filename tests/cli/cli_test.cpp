@@ -312,7 +312,7 @@ TEST_F(Cli, PolynomialControlledSourcesFollowSpicesTermOrder) {
 }
 
 // ngspice's E and G with an expression (vol=, cur=, value=, quoted or braced): B sources. The
-// same netlist in ngspice 38 writes v(e1) = -3, v(g1) = -2 and v(e2) = v(e3) = -6 at t = 0.
+// same netlist in ngspice 38 writes v(e1) = -3, v(g1) = -2, v(e2) = -6 and v(g2) = 4 at t = 0.
 TEST_F(Cli, ExpressionControlledSourcesAreBehavioralSources) {
   const std::string netlist =
       "* vol= cur= value=\n"

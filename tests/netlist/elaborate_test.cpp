@@ -116,8 +116,8 @@ TEST(Elaborate, SubcircuitsFlattenWithHierarchicalNames) {
 }
 
 TEST(Elaborate, GlobalNodesAreSharedByEveryInstance) {
-  // ngspice: a .global node inside a subcircuit is the top level's, whichever instance uses it
-  // (two dividers from one vdd: 3 V each, 6 mA from the source).
+  // ngspice: a .global node inside a subcircuit is the top level's, whichever instance uses it;
+  // the subcircuit's other internal nodes stay the instance's own.
   FlatCircuit circuit = elaborate_text(
       "t\n"
       ".subckt half out\n"

@@ -104,6 +104,8 @@ SourceFunction::SourceFunction(const Waveform& waveform, double dc_value, const 
   if (waveform.repeat_from && *waveform.repeat_from < p_[p_.size() - 2]) {
     repeat_from_ = waveform.repeat_from;
     repeat_period_ = p_[p_.size() - 2] - *repeat_from_;
+    while (2 * repeat_first_point_ + 2 < p_.size() && p_[2 * repeat_first_point_ + 2] <= *repeat_from_)
+      ++repeat_first_point_;
   }
 }
 
@@ -165,14 +167,9 @@ double SourceFunction::repetition_time(std::size_t point, double j) const {
 double SourceFunction::pwl_value(double t) const {
   const std::size_t n = p_.size() / 2;
   const bool repeating = repeat_from_ && t > p_[2 * n - 2];
-  // The points of the first pass, or those of the repetition that contains t: from the last one
-  // at time r on.
-  std::size_t first = 0;
-  double j = 0;
-  if (repeating) {
-    while (first + 1 < n && p_[2 * first + 2] <= *repeat_from_) ++first;
-    j = repetition_index(t);
-  }
+  // The points of the first pass, or those of the repetition that contains t.
+  const std::size_t first = repeating ? repeat_first_point_ : 0;
+  const double j = repeating ? repetition_index(t) : 0;
   auto time_of = [&](std::size_t k) { return repeating ? repetition_time(k, j) : p_[2 * k]; };
   if (t <= time_of(first)) return p_[2 * first + 1];
   for (std::size_t k = first + 1; k < n; ++k) {

@@ -44,6 +44,7 @@ class SourceFunction {
   double dc_;
   std::optional<double> repeat_from_;
   double repeat_period_ = 0;  // last PWL time - repeat_from_
+  std::size_t repeat_first_point_ = 0;  // a repetition starts at the last point at time r
   // The period pulse_corners() found last: every load asks for the same one (the integrator,
   // its output and its event location all evaluate inside one step), and finding it costs a
   // division and a floor. Not thread-safe, as the model that owns it is not.

@@ -31,13 +31,15 @@ struct ElementSpec {
   char type = 0;                     // element letter: r c l k v i e f g h b d s w
   std::string name;                  // lower case, hierarchical ("x1.r1")
   std::vector<std::string> nodes;    // lower case; "0" and "gnd" are ground
-  double value = 0;                  // R, C, L value; K coupling; E, F, G, H gain; V, I DC value
+  double value = 0;                  // R, C, L value; K coupling; E, F, G, H gain; V, I DC value;
+                                     // M: +1 NMOS, -1 PMOS (ngspice's type sign)
   std::optional<double> initial_condition;  // IC=: capacitor voltage, inductor current
   std::vector<std::string> controls; // F, H, W: controlling element; K: the two inductors
   Waveform waveform;                 // V, I: transient function (constant: the DC value)
   netlist::ExpressionPtr expression; // B: V= or I= expression
   bool expression_is_current = false;
-  std::map<std::string, double> model;  // D, S, W: .model parameters, lower-case names
+  std::map<std::string, double> model;  // D, S, W, M: .model parameters, lower-case names
+  std::map<std::string, double> instance_parameters;  // M: L W AD AS PD PS NRD NRS M as written
   double area = 1;                   // D: area factor
   std::optional<bool> initially_on;  // S, W: ON / OFF on the instance line
 };

@@ -1,5 +1,7 @@
 #include "mna/from_netlist.hpp"
 
+#include <algorithm>
+
 #include "mna/device.hpp"
 
 namespace mna {
@@ -27,15 +29,17 @@ Waveform waveform_from(const netlist::Waveform& w) {
   return out;
 }
 
-void copy_model(const netlist::FlatCircuit& flat, const netlist::FlatElement& element, netlist::ModelType expected,
-                ElementSpec& spec) {
+// The element's model's parameters into spec; the model's type, one of `expected`.
+netlist::ModelType copy_model(const netlist::FlatCircuit& flat, const netlist::FlatElement& element,
+                              std::initializer_list<netlist::ModelType> expected, ElementSpec& spec) {
   const netlist::FlatModel* model = nullptr;
   for (const auto& m : flat.models)
     if (m.name == element.model) model = &m;
   if (!model) throw ModelError("element '" + element.name + "': no model '" + element.model + "'");
-  if (model->type != expected)
+  if (std::find(expected.begin(), expected.end(), model->type) == expected.end())
     throw ModelError("element '" + element.name + "': model '" + element.model + "' has the wrong type");
   for (const auto& [name, parameter] : model->parameters) spec.model[name] = parameter.value;
+  return model->type;
 }
 
 }  // namespace
@@ -65,10 +69,17 @@ CircuitSpec circuit_from_netlist(const netlist::FlatCircuit& flat) {
         break;
       case Kind::diode:
         spec.area = element.value;
-        copy_model(flat, element, netlist::ModelType::diode, spec);
+        copy_model(flat, element, {netlist::ModelType::diode}, spec);
         break;
-      case Kind::voltage_switch: copy_model(flat, element, netlist::ModelType::voltage_switch, spec); break;
-      case Kind::current_switch: copy_model(flat, element, netlist::ModelType::current_switch, spec); break;
+      case Kind::mosfet:
+        spec.instance_parameters = element.instance_parameters;
+        spec.value = copy_model(flat, element, {netlist::ModelType::nmos, netlist::ModelType::pmos}, spec) ==
+                             netlist::ModelType::nmos
+                         ? 1
+                         : -1;
+        break;
+      case Kind::voltage_switch: copy_model(flat, element, {netlist::ModelType::voltage_switch}, spec); break;
+      case Kind::current_switch: copy_model(flat, element, {netlist::ModelType::current_switch}, spec); break;
       default: break;
     }
   }

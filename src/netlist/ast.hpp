@@ -89,6 +89,13 @@ struct Diode {
   std::vector<Assignment> parameters;
 };
 
+// M: name drain gate source bulk model [l=... w=... ad=... as=... pd=... ps=... nrd=... nrs=... m=...] [off]
+struct Mosfet {
+  Word name, drain, gate, source, bulk, model;
+  std::vector<Assignment> parameters;
+  bool off = false;
+};
+
 // S: name n+ n- nc+ nc- model [on|off]
 struct VoltageSwitch {
   Word name, positive, negative, control_positive, control_negative, model;
@@ -200,7 +207,7 @@ struct IgnoredCard {
 
 struct Card {
   std::variant<TwoTerminal, Coupling, IndependentSource, VoltageControlled, CurrentControlled,
-               Polynomial, Behavioral, Diode, VoltageSwitch, CurrentSwitch, Instance, ParamCard, ModelCard,
+               Polynomial, Behavioral, Diode, Mosfet, VoltageSwitch, CurrentSwitch, Instance, ParamCard, ModelCard,
                Subcircuit, Include, TranCard, NodeValuesCard, OptionsCard, OutputCard, TempCard, GlobalCard,
                TitleCard, IgnoredCard>
       node;

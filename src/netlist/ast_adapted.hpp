@@ -31,6 +31,7 @@ BOOST_FUSION_ADAPT_STRUCT(netlist::ast::CurrentControlled, name, positive, negat
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::Polynomial, name, positive, negative, dimension, arguments)
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::Behavioral, name, positive, negative, quantity, expression)
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::Diode, name, anode, cathode, model, area, off, parameters)
+BOOST_FUSION_ADAPT_STRUCT(netlist::ast::Mosfet, name, drain, gate, source, bulk, model, parameters, off)
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::VoltageSwitch, name, positive, negative, control_positive,
                           control_negative, model, state)
 BOOST_FUSION_ADAPT_STRUCT(netlist::ast::CurrentSwitch, name, positive, negative, control, model,

@@ -31,6 +31,7 @@ enum class ElementKind : char {
   ccvs = 'h',            // current-controlled voltage source
   behavioral = 'b',      // B source: V= or I= expression
   diode = 'd',
+  mosfet = 'm',
   voltage_switch = 's',
   current_switch = 'w',
 };
@@ -62,23 +63,25 @@ struct FlatElement {
   // itself shows "r.x1.r1"; the kind is a field here, so the name needs no letter prefix).
   std::string name;
   // r c l d b v i: n+ n-.  e g: n+ n- nc+ nc-.  s: n+ n- nc+ nc-.  f h w: n+ n-.  k: none.
+  // m: drain gate source bulk.
   std::vector<std::string> nodes;
   // r: ohms  c: farads  l: henries  k: coupling coefficient  e h: gain (V/V, V/A)
   // f g: gain (A/A, A/V)  d: area factor (1 if not written).  Unused by v i b s w.
   double value = 0.0;
   // f h w: {controlling voltage source}.  k: {inductor 1, inductor 2}. Hierarchical names.
   std::vector<std::string> controls;
-  std::string model;                         // d s w: the name of a FlatCircuit::models entry
+  std::map<std::string, double> instance_parameters;  // m: L W AD AS PD PS NRD NRS M as written
+  std::string model;                         // d s w m: the name of a FlatCircuit::models entry
   std::optional<double> initial_condition;   // c: IC= volts  l: IC= amps  d: IC= volts
   std::optional<bool> initially_on;          // s w: ON / OFF written after the model
-  bool off = false;                          // d: OFF (initial guess hint)
+  bool off = false;                          // d m: OFF (initial guess hint)
   SourceValue source;                        // v i
   bool behavioral_is_voltage = true;         // b: V= (true) or I= (false)
   ExpressionPtr expression;                  // b: the expression, parameters substituted
   SourceRange where;                         // the element's name on its card
 };
 
-enum class ModelType { diode, voltage_switch, current_switch };
+enum class ModelType { diode, voltage_switch, current_switch, nmos, pmos };
 
 struct ModelParameter {
   double value;
@@ -87,7 +90,7 @@ struct ModelParameter {
 
 // Parameter names are lower case and kept even when unknown (unknown ones were warned about).
 // Known: diode IS N RS CJO (CJ0 written as given) VJ M TT BV IBV EG XTI FC IDEAL RON ROFF VFWD;
-// sw VT VH RON ROFF; csw IT IH RON ROFF.
+// sw VT VH RON ROFF; csw IT IH RON ROFF; nmos and pmos: ngspice's level-1 MOSFET's.
 struct FlatModel {
   std::string name;  // lower case; "x1.dmod" for a model defined inside a subcircuit
   ModelType type;

@@ -19,6 +19,9 @@
 #include <unordered_map>
 #include <utility>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include "netlist/netlist.hpp"
 
 namespace netlist {
@@ -513,6 +516,12 @@ class Elaborator {
   }
 
   void elaborate_model(const ast::ModelCard& card, const Instance& instance) {
+    // ngspice's level-1 MOSFET parameters; UO, NSUB, NSS, TPG act only with TOX, KF and AF only
+    // in noise analysis.
+    static const std::vector<std::string> mosfet_parameters = {
+        "level", "vto", "vt0", "kp",   "gamma", "phi", "lambda", "rd",  "rs",  "cbd", "cbs", "is",  "pb",  "cgso",
+        "cgdo",  "cgbo", "rsh", "cj",  "mj",    "cjsw", "mjsw",  "js",  "tox", "ld",  "uo",  "u0",  "fc",  "nsub",
+        "nss",   "tpg", "kf",  "af",   "tnom"};
     static const std::map<std::string, std::pair<ModelType, std::vector<std::string>>> known = {
         {"d",
          {ModelType::diode,
@@ -520,6 +529,8 @@ class Elaborator {
            "ron", "roff", "vfwd"}}},
         {"sw", {ModelType::voltage_switch, {"vt", "vh", "ron", "roff", "ideal"}}},
         {"csw", {ModelType::current_switch, {"it", "ih", "ron", "roff", "ideal"}}},
+        {"nmos", {ModelType::nmos, mosfet_parameters}},
+        {"pmos", {ModelType::pmos, mosfet_parameters}},
     };
     auto type = known.find(card.type.text);
     if (type == known.end()) {
@@ -537,7 +548,26 @@ class Elaborator {
       if (auto v = value(parameter.value, *instance.scope))
         model.parameters[parameter.name.text] = {*v, parameter.name.where};
     }
+    if (model.type == ModelType::nmos || model.type == ModelType::pmos) check_mosfet_model(model);
     circuit_.models.push_back(std::move(model));
+  }
+
+  // What padsim's MOSFET is: ngspice's level 1 at the nominal temperature, without the Meyer
+  // gate capacitances (which TOX switches on there, and which are no charge: ngspice integrates
+  // capacitances averaged over the step).
+  void check_mosfet_model(const FlatModel& model) {
+    auto refuse = [&](const char* name, bool unsupported, const std::string& why) {
+      const auto found = model.parameters.find(name);
+      if (found != model.parameters.end() && unsupported)
+        diagnostics_.error(found->second.where, "model '" + model.name + "': " + why);
+    };
+    const auto level = model.get("level"), tox = model.get("tox"), tnom = model.get("tnom");
+    refuse("level", level && *level != 1,
+           "LEVEL " + fmt::format("{}", level.value_or(1)) + " is not supported; padsim has the level-1 MOSFET");
+    refuse("tox", tox && *tox != 0,
+           "TOX (the Meyer gate capacitances) is not supported; give KP, and the gate capacitances as "
+           "CGSO, CGDO, CGBO");
+    refuse("tnom", tnom && *tnom != 27, "TNOM other than 27 C is not supported");
   }
 
   FlatElement element_of(ElementKind kind, const ast::Word& name, const Instance& instance) {
@@ -767,17 +797,17 @@ class Elaborator {
     if (element.expression) add(std::move(element));
   }
 
-  // The flat name of a model of the wanted type, or nullopt (error reported).
-  std::optional<std::string> model_for(const ast::Word& name, const char* type,
+  // The flat name of a model of one of the wanted types, or nullopt (error reported).
+  std::optional<std::string> model_for(const ast::Word& name, std::initializer_list<const char*> types,
                                        const char* element_kind, const Instance& instance) {
     auto [model, flat_name] = instance.definitions->find_model(name.text);
     if (!model) {
       diagnostics_.error(name.where, "model '" + name.text + "' is not defined");
       return std::nullopt;
     }
-    if (model->type.text != type) {
-      diagnostics_.error(name.where, "model '" + name.text + "' is a " + model->type.text +
-                                         " model; " + element_kind + " needs a " + type + " model");
+    if (!is_one_of(model->type.text, types)) {
+      diagnostics_.error(name.where, fmt::format("model '{}' is a {} model; {} needs a {} model", name.text,
+                                                 model->type.text, element_kind, fmt::join(types, " or ")));
       return std::nullopt;
     }
     return flat_name;
@@ -786,7 +816,7 @@ class Elaborator {
   void elaborate_card(const ast::Diode& card, const ast::Card&, const Instance& instance) {
     FlatElement element = element_of(ElementKind::diode, card.name, instance);
     element.nodes = {instance.node(card.anode.text), instance.node(card.cathode.text)};
-    auto model = model_for(card.model, "d", "a diode", instance);
+    auto model = model_for(card.model, {"d"}, "a diode", instance);
     element.value = 1.0;
     if (card.area) {
       auto area = value(*card.area, *instance.scope);
@@ -800,12 +830,35 @@ class Elaborator {
     add(std::move(element));
   }
 
+  void elaborate_card(const ast::Mosfet& card, const ast::Card&, const Instance& instance) {
+    FlatElement element = element_of(ElementKind::mosfet, card.name, instance);
+    element.nodes = {instance.node(card.drain.text), instance.node(card.gate.text), instance.node(card.source.text),
+                     instance.node(card.bulk.text)};
+    bool valid = true;
+    for (const ast::Assignment& parameter : card.parameters) {
+      if (!is_one_of(parameter.name.text, {"l", "w", "ad", "as", "pd", "ps", "nrd", "nrs", "m"})) {
+        diagnostics_.error(parameter.name.where,
+                           "unknown parameter '" + parameter.name.text + "' for MOSFET " + element.name);
+        valid = false;
+      } else if (auto v = value(parameter.value, *instance.scope)) {
+        element.instance_parameters[parameter.name.text] = *v;
+      } else {
+        valid = false;
+      }
+    }
+    element.off = card.off;
+    auto model = model_for(card.model, {"nmos", "pmos"}, "a MOSFET", instance);
+    if (!model || !valid) return;
+    element.model = *model;
+    add(std::move(element));
+  }
+
   void elaborate_card(const ast::VoltageSwitch& card, const ast::Card&, const Instance& instance) {
     FlatElement element = element_of(ElementKind::voltage_switch, card.name, instance);
     element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text),
                      instance.node(card.control_positive.text),
                      instance.node(card.control_negative.text)};
-    auto model = model_for(card.model, "sw", "a voltage-controlled switch", instance);
+    auto model = model_for(card.model, {"sw"}, "a voltage-controlled switch", instance);
     if (!model) return;
     element.model = *model;
     if (card.state) element.initially_on = card.state->text == "on";
@@ -817,7 +870,7 @@ class Elaborator {
     element.nodes = {instance.node(card.positive.text), instance.node(card.negative.text)};
     element.controls = {instance.element(card.control.text)};
     control_uses_.push_back({element.controls[0], 'v', card.control.where});
-    auto model = model_for(card.model, "csw", "a current-controlled switch", instance);
+    auto model = model_for(card.model, {"csw"}, "a current-controlled switch", instance);
     if (!model) return;
     element.model = *model;
     if (card.state) element.initially_on = card.state->text == "on";

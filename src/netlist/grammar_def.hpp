@@ -326,6 +326,7 @@ struct polynomial_card_id : card_error_handler {};
 struct expression_controlled_card_id : card_error_handler {};
 struct behavioral_card_id : card_error_handler {};
 struct diode_card_id : card_error_handler {};
+struct mosfet_card_id : card_error_handler {};
 struct voltage_switch_card_id : card_error_handler {};
 struct current_switch_card_id : card_error_handler {};
 struct instance_card_id : card_error_handler {};
@@ -472,6 +473,7 @@ x3::rule<behavioral_card_id, ast::Behavioral> const behavioral_card = "a B card"
 x3::rule<expression_controlled_card_id, ast::Behavioral> const expression_controlled_card =
     "an E or G card with an expression";
 x3::rule<diode_card_id, ast::Diode> const diode_card = "a D card";
+x3::rule<mosfet_card_id, ast::Mosfet> const mosfet_card = "an M card";
 x3::rule<voltage_switch_card_id, ast::VoltageSwitch> const voltage_switch_card = "an S card";
 x3::rule<current_switch_card_id, ast::CurrentSwitch> const current_switch_card = "a W card";
 x3::rule<instance_card_id, ast::Instance> const instance_card = "an X card";
@@ -534,6 +536,8 @@ auto const expression_controlled_card_def =
     element_name > node > node > controlled_quantity > '=' > expression > end_of_card;
 auto const diode_card_def = element_name > node > node > model_name > -value >
                             x3::matches[keyword("off")] > *assignment > end_of_card;
+auto const mosfet_card_def = element_name > node > node > node > node > model_name > *assignment >
+                             x3::matches[keyword("off")] > end_of_card;
 auto const switch_state_def = x3::raw[keyword("on") | keyword("off")][make_word];
 auto const voltage_switch_card_def =
     element_name > node > node > node > node > model_name > -switch_state > end_of_card;
@@ -614,7 +618,7 @@ BOOST_SPIRIT_DEFINE(minus_token, not_token, voltage_open, current_open)
 BOOST_SPIRIT_DEFINE(unary, power, primary, node_voltage, branch_current, call, arguments,
                     closing_paren, assignment, parameter, params_keyword, two_terminal_card,
                     coupling_card, source_card, voltage_controlled_card, current_controlled_card,
-                    behavioral_card, diode_card, voltage_switch_card, current_switch_card,
+                    behavioral_card, diode_card, mosfet_card, voltage_switch_card, current_switch_card,
                     polynomial_card, polynomial_arguments, expression_controlled_card,
                     controlled_quantity)
 BOOST_SPIRIT_DEFINE(instance_card, source_spec, waveform_spec, dc_spec, ac_spec, bare_spec,

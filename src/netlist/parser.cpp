@@ -261,6 +261,8 @@ class Parser {
         return parse_as<ast::Behavioral>(parser::behavioral_card, line, where);
       case 'd':
         return parse_as<ast::Diode>(parser::diode_card, line, where);
+      case 'm':
+        return parse_as<ast::Mosfet>(parser::mosfet_card, line, where);
       case 's':
         return parse_as<ast::VoltageSwitch>(parser::voltage_switch_card, line, where);
       case 'w':

@@ -99,6 +99,10 @@ struct CardPrinter {
                      c.area ? fmt::format(" {}", value(*c.area)) : "", c.off ? " off" : "",
                      assignments(c.parameters, true)));
   }
+  void operator()(const ast::Mosfet& c) {
+    line(fmt::format("{} {} {} {} {} {}{}{}", c.name.text, c.drain.text, c.gate.text, c.source.text, c.bulk.text,
+                     c.model.text, assignments(c.parameters, true), c.off ? " off" : ""));
+  }
   void operator()(const ast::VoltageSwitch& c) {
     line(fmt::format("{} {} {} {} {} {}{}", c.name.text, c.positive.text, c.negative.text,
                      c.control_positive.text, c.control_negative.text, c.model.text,

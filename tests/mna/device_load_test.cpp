@@ -242,6 +242,70 @@ TEST(DeviceLoad, DiodeJunctionEnergyIsTheIntegralOfVdq) {
   EXPECT_NEAR(m.stored_energy(x), expected, 1e-9 * expected);
 }
 
+// The level-1 MOSFET against Shichman and Hodges' closed form (the equations ngspice's
+// mos1load.c evaluates): I = KP W / L (1 + LAMBDA vds) (vgs - VT)^2 / 2 in saturation,
+// KP W / L (1 + LAMBDA vds) vds (vgs - VT - vds / 2) below it, VT = VTO + GAMMA (sqrt(PHI - vbs) -
+// sqrt(PHI)). Nodes d g s b are unknowns 0-3; the drain row receives the current drawn into it.
+TEST(DeviceLoad, MosfetDrainCurrentIsShichmanHodges) {
+  const double kp = 50e-6, vto = 0.8, gamma = 0.5, phi = 0.65, lambda = 0.02, width = 20e-6, length = 2e-6;
+  auto build = [&](double polarity) {
+    CircuitSpec c;
+    auto& m = c.add("m1", {"d", "g", "s", "b"}, polarity);
+    m.model = {{"kp", kp}, {"vto", polarity * vto}, {"gamma", gamma}, {"phi", phi}, {"lambda", lambda}, {"is", 0}};
+    m.instance_parameters = {{"w", width}, {"l", length}};
+    return c;
+  };
+  const double beta = kp * width / length;
+  auto threshold = [&](double vbs) { return vto + gamma * (std::sqrt(phi - vbs) - std::sqrt(phi)); };
+  auto drain_current = [&](double vgs, double vds, double vbs) {
+    const double overdrive = vgs - threshold(vbs);
+    if (overdrive <= 0) return 0.0;
+    if (overdrive <= vds) return beta * (1 + lambda * vds) * overdrive * overdrive / 2;
+    return beta * (1 + lambda * vds) * vds * (overdrive - vds / 2);
+  };
+  Model nmos(build(1), {}), pmos(build(-1), {});
+  auto current_into_drain = [](Model& model, double vd, double vg, double vs, double vb) {
+    Vector x(4);
+    x << vd, vg, vs, vb;
+    const auto l = evaluate(model, 0, x, {});
+    return l.f[0] + 1e-12 * (vb - vd);  // without the drain junction's gmin
+  };
+  struct Bias {
+    double vd, vg, vs, vb;
+  };
+  for (const Bias b : {Bias{5, 3, 0, 0}, Bias{0.5, 3, 0, 0}, Bias{4, 2.5, 1, -1}, Bias{1.2, 4, 1, 0}, Bias{3, 0.5, 0, 0}}) {
+    SCOPED_TRACE(::testing::Message() << "vd " << b.vd << " vg " << b.vg << " vs " << b.vs << " vb " << b.vb);
+    const double expected = drain_current(b.vg - b.vs, b.vd - b.vs, b.vb - b.vs);
+    EXPECT_NEAR(current_into_drain(nmos, b.vd, b.vg, b.vs, b.vb), expected, 1e-12 * std::abs(expected) + 1e-20);
+    // PMOS: every voltage and the current mirrored.
+    EXPECT_NEAR(current_into_drain(pmos, -b.vd, -b.vg, -b.vs, -b.vb), -expected, 1e-12 * std::abs(expected) + 1e-20);
+    // Drain and source written the other way round: the same channel, the current reversed.
+    EXPECT_NEAR(current_into_drain(nmos, b.vs, b.vg, b.vd, b.vb), -expected, 1e-12 * std::abs(expected) + 1e-20);
+  }
+}
+
+// Bulk junctions (mos1load.c): IS (exp(v / vt) - 1) + gmin v above -3 vt, gmin v - IS below;
+// the depletion charges of CBD and of CJSW times PD add.
+TEST(DeviceLoad, MosfetBulkJunctionsAreNgspices) {
+  CircuitSpec c;
+  auto& m = c.add("m1", {"d", "g", "s", "b"}, 1);
+  m.model = {{"is", 1e-13}, {"cbd", 1e-12}, {"cjsw", 1e-9}, {"pb", 0.9}, {"mj", 0.5}, {"mjsw", 0.33}, {"vto", 10}};
+  m.instance_parameters = {{"pd", 4e-6}};
+  Model model(c, {});
+  Vector x(4);
+  x << -0.5, 0, 0, 0.1;  // bulk-drain forward by 0.6 V, bulk-source by 0.1 V
+  auto l = evaluate(model, 0, x, {});
+  const double forward = 1e-13 * (std::exp(0.6 / thermal_voltage) - 1) + 1e-12 * 0.6;
+  EXPECT_NEAR(l.f[0], -forward, 1e-12 * forward);
+  x << 2.0, 0, 0, 0;  // drain junction reversed: -IS + gmin vbd
+  l = evaluate(model, 0, x, {});
+  EXPECT_NEAR(l.f[0], 1e-13 + 1e-12 * 2.0, 1e-26);
+  const double side = 1e-9 * 4e-6;
+  const double charge = 0.9 * 1e-12 * (1 - std::pow(1 + 2.0 / 0.9, 0.5)) / 0.5 +
+                        0.9 * side * (1 - std::pow(1 + 2.0 / 0.9, 0.67)) / 0.67;
+  EXPECT_NEAR(l.q[3], charge, 1e-9 * std::abs(charge));
+}
+
 TEST(DeviceLoad, NonFiniteValuesOrDerivativesAreOutsideTheDomain) {
   // B1: v(out) = sqrt(v(in)): its slope is infinite at 0 and it has no value below.
   CircuitSpec c;

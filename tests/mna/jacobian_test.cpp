@@ -64,6 +64,12 @@ CircuitSpec every_device() {
                               binary(BinaryOperator::multiply, current("l1"), call("abs", {voltage("e")})),
                               call("limit", {binary(BinaryOperator::divide, voltage("c"), voltage("b")), number(-1), number(2)}));
   c.add("r2", {"f", "0"}, 1.0);
+  // MOSFETs with every part: body effect, series resistances, junction and overlap charges.
+  auto& m1 = c.add("m1", {"a", "b", "c", "0"}, 1);
+  m1.model = {{"vto", 0.2}, {"kp", 1e-3}, {"gamma", 0.4}, {"lambda", 0.05}, {"rd", 3.0}, {"rs", 2.0},
+              {"cbd", 1e-12}, {"cj", 1e-4}, {"cjsw", 1e-10}, {"cgso", 1e-9}, {"cgdo", 1e-9}, {"cgbo", 1e-9}};
+  m1.instance_parameters = {{"w", 10e-6}, {"l", 1e-6}, {"as", 1e-11}, {"ps", 1e-5}, {"pd", 1e-5}};
+  c.add("m2", {"d", "e", "f", "a"}, -1).model = {{"vto", -0.3}, {"kp", 5e-4}, {"gamma", 0.3}, {"lambda", 0.1}};
   return c;
 }
 

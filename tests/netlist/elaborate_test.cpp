@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -113,6 +114,31 @@ TEST(Elaborate, SubcircuitsFlattenWithHierarchicalNames) {
   ASSERT_TRUE(circuit.tran);
   EXPECT_EQ(circuit.tran->step, 1e-9);
   EXPECT_EQ(circuit.tran->stop, 1e-6);
+}
+
+TEST(Elaborate, MosfetCardNodesInstanceParametersAndModel) {
+  // ngspice's M card: drain gate source bulk model, then L= W= AD= AS= PD= PS= NRD= NRS= M=
+  // and OFF; parameters and subcircuit nodes resolve as on any card.
+  FlatCircuit circuit = elaborate_text(
+      "t\n.param wn=10u\n.subckt inv in out vdd\nM1 out in 0 0 nch W={wn} L=1u AD=20p OFF\n"
+      "M2 out in vdd vdd pch W={2*wn} L=1u M=2\n.ends\nX1 a b vdd inv\n"
+      ".model nch nmos (level=1 vto=0.7 kp=110u)\n.model pch pmos (vto=-0.7)\n.tran 1n 1u\n");
+  const netlist::FlatElement& n = element(circuit, "x1.m1");
+  EXPECT_EQ(n.kind, ElementKind::mosfet);
+  EXPECT_EQ(n.nodes, (std::vector<std::string>{"b", "a", "0", "0"}));
+  EXPECT_EQ(n.model, "nch");
+  EXPECT_TRUE(n.off);
+  EXPECT_EQ(n.instance_parameters, (std::map<std::string, double>{{"ad", 20e-12}, {"l", 1e-6}, {"w", 10e-6}}));
+  const netlist::FlatElement& p = element(circuit, "x1.m2");
+  EXPECT_EQ(p.nodes, (std::vector<std::string>{"b", "a", "vdd", "vdd"}));
+  EXPECT_FALSE(p.off);
+  EXPECT_DOUBLE_EQ(p.instance_parameters.at("w"), 20e-6);
+  EXPECT_DOUBLE_EQ(p.instance_parameters.at("m"), 2);
+  const auto model = std::find_if(circuit.models.begin(), circuit.models.end(),
+                                  [](const netlist::FlatModel& m) { return m.name == "pch"; });
+  ASSERT_NE(model, circuit.models.end());
+  EXPECT_EQ(model->type, netlist::ModelType::pmos);
+  EXPECT_DOUBLE_EQ(*model->get("vto"), -0.7);
 }
 
 TEST(Elaborate, GlobalNodesAreSharedByEveryInstance) {

@@ -11,22 +11,18 @@
 #include <optional>
 
 #include "mna/device.hpp"
+#include "mna/devices/junction.hpp"
 
 namespace mna {
 namespace {
 
-constexpr double boltzmann = 1.38064852e-23;   // ngspice 39 const.h
-constexpr double charge = 1.6021766208e-19;
-constexpr double nominal_temperature = 300.15; // 27 C
-constexpr double gmin = 1e-12;
-constexpr double largest_exponent = 40;
-constexpr double largest_current = 1e3;  // amperes, before area: no diode here carries more
+using junction::gmin;
 
 class Diode final : public Device {
  public:
   Diode(const ElementSpec& spec, const RunSettings& run) : Device(spec) {
     require_nodes(spec, 2);
-    const double area = spec.area, vt = boltzmann * nominal_temperature / charge;
+    const double area = spec.area, vt = junction::nominal_thermal_voltage;
     saturation_current_ = parameter(spec, "is", 1e-14) * area;
     thermal_voltage_ = parameter(spec, "n", 1) * vt;
     breakdown_thermal_voltage_ = parameter(spec, "nbv", parameter(spec, "n", 1)) * vt;
@@ -39,9 +35,9 @@ class Diode final : public Device {
     if (!(saturation_current_ > 0) || !(thermal_voltage_ > 0) || !(breakdown_thermal_voltage_ > 0) || !(series_resistance_ >= 0) ||
         !(junction_potential_ > 0) || !(grading_ < 1) || !(depletion_fraction_ < 1))
       throw ModelError("diode '" + spec.name + "': parameters out of range (IS, N > 0, RS >= 0, VJ > 0, M < 1, FC < 1)");
-    exponent_limit_ = std::min(largest_exponent, std::log(largest_current * area / saturation_current_));
-    critical_voltage_ = critical_voltage(thermal_voltage_);
-    critical_breakdown_voltage_ = critical_voltage(breakdown_thermal_voltage_);
+    exponent_limit_ = junction::exponent_limit(saturation_current_ / area);
+    critical_voltage_ = junction::critical_voltage(thermal_voltage_, saturation_current_);
+    critical_breakdown_voltage_ = junction::critical_voltage(breakdown_thermal_voltage_, saturation_current_);
     if (!(exponent_limit_ > 1)) throw ModelError("diode '" + spec.name + "': IS too large");
     if (auto bv = spec.model.find("bv"); bv != spec.model.end() && std::isfinite(bv->second))
       breakdown_voltage_ = breakdown_knee(bv->second, parameter(spec, "ibv", 1e-3) * area, vt, run.reltol);
@@ -83,10 +79,10 @@ class Diode final : public Device {
   bool limits_newton_steps() const override { return true; }
   double newton_step_fraction(const Vector& x, const Vector& x_next) const override {
     const double v = junction_voltage(x), v_next = junction_voltage(x_next);
-    double fraction = junction_step_fraction(v, v_next, thermal_voltage_, critical_voltage_);
+    double fraction = junction::step_fraction(v, v_next, thermal_voltage_, critical_voltage_);
     if (breakdown_voltage_) {
       const double knee = *breakdown_voltage_;
-      fraction = std::min(fraction, junction_step_fraction(-(v + knee), -(v_next + knee), breakdown_thermal_voltage_,
+      fraction = std::min(fraction, junction::step_fraction(-(v + knee), -(v_next + knee), breakdown_thermal_voltage_,
                                                            critical_breakdown_voltage_));
     }
     return fraction;
@@ -97,19 +93,11 @@ class Diode final : public Device {
     if (series_resistance_ > 0) out.push_back({anode_, junction_, Connection::conductive, name()});
   }
 
-  // Energy in the junction charge: the integral of v dq from 0 to v (composite Simpson on
-  // v C(v); only evaluated at events, for the jump energy balance).
   double stored_energy(const Vector& x) const override {
     if (junction_capacitance_ == 0 && transit_time_ == 0) return 0;
-    const double v = junction_voltage(x);
-    constexpr int intervals = 256;
-    const double h = v / intervals;
-    auto integrand = [&](double u) {
-      return u * (junction_charge(u).second + transit_time_ * junction_current(u).second);
-    };
-    double sum = integrand(0) + integrand(v);
-    for (int k = 1; k < intervals; ++k) sum += (k % 2 ? 4 : 2) * integrand(k * h);
-    return sum * h / 3;
+    return junction::charge_energy(junction_voltage(x), [&](double u) {
+      return junction_charge(u).second + transit_time_ * junction_current(u).second;
+    });
   }
 
   // Junction current without GMIN and its derivative (ngspice dioload.c: forward exponential,
@@ -130,50 +118,14 @@ class Diode final : public Device {
     return {-is * ex, is * dex / vtb};
   }
 
-  // Depletion charge and capacitance (SPICE: power law below FC VJ, linear extrapolation of the
-  // capacitance above).
   std::pair<double, double> junction_charge(double v) const {
-    const double cj = junction_capacitance_, vj = junction_potential_, m = grading_, fc = depletion_fraction_;
-    if (cj == 0) return {0, 0};
-    if (v < fc * vj) {
-      const double arg = 1 - v / vj, sarg = std::exp(-m * std::log(arg));
-      return {vj * cj * (1 - arg * sarg) / (1 - m), cj * sarg};
-    }
-    const double f1 = vj * (1 - std::pow(1 - fc, 1 - m)) / (1 - m);
-    const double f2 = std::pow(1 - fc, 1 + m), f3 = 1 - fc * (1 + m);
-    const double q = cj * f1 + cj / f2 * (f3 * (v - fc * vj) + m / (2 * vj) * (v * v - fc * vj * fc * vj));
-    return {q, cj / f2 * (f3 + m * v / vj)};
+    return junction::depletion_charge(v, junction_capacitance_, junction_potential_, grading_, depletion_fraction_);
   }
 
  private:
   double junction_voltage(const Vector& x) const { return value(x, junction_) - value(x, cathode_); }
 
-  // pnjlim's critical voltage, where the current-voltage curve bends most sharply (its radius
-  // of curvature is least). At least vt, so that the limit below stays a forward voltage for
-  // any IS.
-  double critical_voltage(double vt) const {
-    return std::max(vt, vt * std::log(vt / (std::numbers::sqrt2 * saturation_current_)));
-  }
-
-  // The fraction of a step from v to v_next along an exponential exp(v / vt) that pnjlim (in its
-  // Berkeley form) lets through: a step more than 2 vt forward that ends past the critical
-  // voltage stops where the current has grown by the factor the linearization at v promised,
-  // vt ln(v_next / vt) from reverse bias and v + vt ln(1 + (v_next - v) / vt) from forward bias.
-  static double junction_step_fraction(double v, double v_next, double vt, double v_critical) {
-    if (!(v_next > v_critical && v_next - v > 2 * vt)) return 1;
-    const double limited = v > 0 ? v + vt * std::log1p((v_next - v) / vt) : vt * std::log(v_next / vt);
-    return (limited - v) / (v_next - v);
-  }
-
-  // exp(x) and its slope, continued linearly above the exponent limit.
-  std::pair<double, double> limited_exp(double x) const {
-    if (x <= exponent_limit_) {
-      const double e = std::exp(x);
-      return {e, e};
-    }
-    const double e = std::exp(exponent_limit_);
-    return {e * (1 + x - exponent_limit_), e};
-  }
+  std::pair<double, double> limited_exp(double x) const { return junction::limited_exp(x, exponent_limit_); }
 
   // ngspice's knee (diotemp.c): the voltage where the breakdown current equals IBV, iterated
   // to RELTOL as there (vt: the thermal voltage without N, as there).

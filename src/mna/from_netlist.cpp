@@ -71,13 +71,12 @@ CircuitSpec circuit_from_netlist(const netlist::FlatCircuit& flat) {
         spec.area = element.value;
         copy_model(flat, element, {netlist::ModelType::diode}, spec);
         break;
-      case Kind::mosfet:
+      case Kind::mosfet: {
+        const auto type = copy_model(flat, element, {netlist::ModelType::nmos, netlist::ModelType::pmos}, spec);
+        spec.value = type == netlist::ModelType::nmos ? 1 : -1;
         spec.instance_parameters = element.instance_parameters;
-        spec.value = copy_model(flat, element, {netlist::ModelType::nmos, netlist::ModelType::pmos}, spec) ==
-                             netlist::ModelType::nmos
-                         ? 1
-                         : -1;
         break;
+      }
       case Kind::voltage_switch: copy_model(flat, element, {netlist::ModelType::voltage_switch}, spec); break;
       case Kind::current_switch: copy_model(flat, element, {netlist::ModelType::current_switch}, spec); break;
       default: break;

@@ -556,18 +556,16 @@ class Elaborator {
   // gate capacitances (which TOX switches on there, and which are no charge: ngspice integrates
   // capacitances averaged over the step).
   void check_mosfet_model(const FlatModel& model) {
-    auto refuse = [&](const char* name, bool unsupported, const std::string& why) {
+    auto refuse_unless = [&](const char* name, double supported, const char* why) {
       const auto found = model.parameters.find(name);
-      if (found != model.parameters.end() && unsupported)
-        diagnostics_.error(found->second.where, "model '" + model.name + "': " + why);
+      if (found != model.parameters.end() && found->second.value != supported)
+        diagnostics_.error(found->second.where, fmt::format("model '{}': {}", model.name, why));
     };
-    const auto level = model.get("level"), tox = model.get("tox"), tnom = model.get("tnom");
-    refuse("level", level && *level != 1,
-           "LEVEL " + fmt::format("{}", level.value_or(1)) + " is not supported; padsim has the level-1 MOSFET");
-    refuse("tox", tox && *tox != 0,
-           "TOX (the Meyer gate capacitances) is not supported; give KP, and the gate capacitances as "
-           "CGSO, CGDO, CGBO");
-    refuse("tnom", tnom && *tnom != 27, "TNOM other than 27 C is not supported");
+    refuse_unless("level", 1, "only LEVEL=1 is supported (ngspice's level-1 MOSFET)");
+    refuse_unless("tox", 0,
+                  "TOX (the Meyer gate capacitances) is not supported; give KP, and the gate capacitances as "
+                  "CGSO, CGDO, CGBO");
+    refuse_unless("tnom", 27, "TNOM other than 27 C is not supported");
   }
 
   FlatElement element_of(ElementKind kind, const ast::Word& name, const Instance& instance) {

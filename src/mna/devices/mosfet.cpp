@@ -30,7 +30,7 @@ constexpr double default_width = 1e-4;
 
 class Mosfet final : public Device {
  public:
-  Mosfet(const ElementSpec& spec, const RunSettings&) : Device(spec) {
+  explicit Mosfet(const ElementSpec& spec) : Device(spec) {
     require_nodes(spec, 4);
     type_ = spec.value < 0 ? -1 : 1;
     auto instance = [&](const char* name, double fallback) {
@@ -49,7 +49,7 @@ class Mosfet final : public Device {
     gamma_ = parameter(spec, "gamma", 0);
     phi_ = parameter(spec, "phi", 0.6);
     lambda_ = parameter(spec, "lambda", 0);
-    const double vto = spec.model.contains("vto") ? parameter(spec, "vto", 0) : parameter(spec, "vt0", 0);
+    const double vto = parameter(spec, "vto", parameter(spec, "vt0", 0));
     if (!(phi_ > 0) || !(beta_ > 0) || !(gamma_ >= 0))
       throw ModelError("MOSFET '" + spec.name + "': parameters out of range (KP, PHI > 0, GAMMA >= 0)");
     // ngspice's tVbi: the threshold without the body effect's sqrt(PHI) part.
@@ -78,9 +78,9 @@ class Mosfet final : public Device {
     source_.bottom_capacitance = bottom("cbs", source_area);
     drain_.sidewall_capacitance = parameter(spec, "cjsw", 0) * drain_perimeter * multiplier;
     source_.sidewall_capacitance = parameter(spec, "cjsw", 0) * source_perimeter * multiplier;
-    for (Junction* j : {&drain_, &source_}) {
-      j->critical_voltage = junction::critical_voltage(thermal_voltage_, std::max(j->saturation, 1e-300));
-      j->exponent_limit = junction::exponent_limit(std::max(j->saturation, 1e-300));
+    for (Junction* j : {&drain_, &source_}) {  // infinite for IS = 0: a junction of gmin alone
+      j->critical_voltage = junction::critical_voltage(thermal_voltage_, j->saturation);
+      j->exponent_limit = junction::exponent_limit(j->saturation);
     }
 
     gate_source_capacitance_ = parameter(spec, "cgso", 0) * multiplier * width;
@@ -290,8 +290,8 @@ class Mosfet final : public Device {
   Stamper::Block gate_source_slots_, gate_drain_slots_, gate_bulk_slots_, drain_series_slots_, source_series_slots_;
 };
 
-const Registration registration("m", [](const ElementSpec& spec, const RunSettings& run, DeviceArena& arena) {
-  return arena.make<Mosfet>(spec, run);
+const Registration registration("m", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
+  return arena.make<Mosfet>(spec);
 });
 
 }  // namespace

@@ -90,7 +90,7 @@ struct ModelParameter {
 
 // Parameter names are lower case and kept even when unknown (unknown ones were warned about).
 // Known: diode IS N RS CJO (CJ0 written as given) VJ M TT BV IBV EG XTI FC IDEAL RON ROFF VFWD;
-// sw VT VH RON ROFF; csw IT IH RON ROFF; nmos and pmos: ngspice's level-1 MOSFET's.
+// sw VT VH RON ROFF; csw IT IH RON ROFF; nmos, pmos: ngspice's level-1 MOSFET parameters.
 struct FlatModel {
   std::string name;  // lower case; "x1.dmod" for a model defined inside a subcircuit
   ModelType type;

@@ -1,5 +1,6 @@
 #include "mna/behavioral_expression.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -65,6 +66,42 @@ BehavioralExpression::BehavioralExpression(const netlist::Expression& expression
   values_.resize(tape_.size());
   adjoints_.resize(tape_.size());
   partials_.resize(tape_.size());
+  constant_gradient_ = find_constant_gradient();
+}
+
+bool BehavioralExpression::find_constant_gradient() const {
+  // What each instruction's value is in a fixed mode, from its operands'. A condition is
+  // constant there: its value is the predicate's.
+  enum class Kind : std::uint8_t { constant, of_time, affine, other };
+  auto sum = [](Kind a, Kind b) { return std::max(a, b); };
+  auto product = [](Kind a, Kind b) {
+    if (a == Kind::constant || b == Kind::constant) return std::max(a, b);
+    return a == Kind::of_time && b == Kind::of_time ? Kind::of_time : Kind::other;
+  };
+  auto function = [](Kind a, Kind b) { return std::max(a, b) <= Kind::of_time ? std::max(a, b) : Kind::other; };
+  std::vector<Kind> kinds(tape_.size(), Kind::constant);
+  for (std::size_t k = 0; k < tape_.size(); ++k) {
+    const Instruction& in = tape_[k];
+    auto operand = [&](int index) { return index >= 0 ? kinds[index] : Kind::constant; };
+    const Kind a = operand(in.a), b = operand(in.b);
+    switch (in.op) {
+      case Op::constant: kinds[k] = Kind::constant; break;
+      case Op::input: kinds[k] = Kind::affine; break;
+      case Op::time: kinds[k] = Kind::of_time; break;
+      case Op::negate: kinds[k] = a; break;
+      case Op::add:
+      case Op::subtract: kinds[k] = sum(a, b); break;
+      case Op::multiply: kinds[k] = product(a, b); break;
+      case Op::divide: kinds[k] = b == Kind::constant ? a : function(a, b); break;
+      case Op::greater:
+      case Op::logical_not:
+      case Op::logical_and:
+      case Op::logical_or: kinds[k] = Kind::constant; break;
+      case Op::select: kinds[k] = sum(b, operand(in.c)); break;
+      default: kinds[k] = function(a, b); break;  // power, exp, ..., floor, ceil, atan2
+    }
+  }
+  return kinds.back() <= Kind::affine;
 }
 
 int BehavioralExpression::emit(Instruction instruction) {

@@ -37,6 +37,9 @@ class BehavioralExpression {
   double evaluate(double t, const Vector& x, const std::uint8_t* p, double* gradient) const;
   // guard_k(t, x) for every predicate; conditions nested inside conditions use their own guards.
   void guards(double t, const Vector& x, double* out) const;
+  // Whether the gradient depends on the predicates alone (the expression is affine in the
+  // unknowns in every mode, with coefficients that do not vary in time).
+  bool constant_gradient() const { return constant_gradient_; }
 
  private:
   enum class Op : std::uint8_t {
@@ -60,11 +63,13 @@ class BehavioralExpression {
   // Forward sweep: values and local partials. With p null, conditions follow their guards
   // (written to guard_out).
   void forward(double t, const Vector& x, const std::uint8_t* p, double* guard_out) const;
+  bool find_constant_gradient() const;
 
   std::string element_;
   std::vector<Instruction> tape_;
   std::vector<int> inputs_;
   std::vector<std::string> predicate_labels_;
+  bool constant_gradient_ = false;
   mutable std::vector<double> values_, adjoints_;
   mutable std::vector<std::array<double, 3>> partials_;
 };

@@ -134,8 +134,10 @@ class Evaluation {
   bool jacobian() const { return out_.jacobian_requested; }
   void f(int row, double value) { if (row != ground) out_.f[row] += value; }
   void q(int row, double value) { if (row != ground) out_.q[row] += value; }
-  void df(int slot, double value) { if (slot >= 0) out_.df_dx[slot] += value; }
-  void dq(int slot, double value) { if (slot >= 0) out_.dq_dx[slot] += value; }
+  // Derivatives count only when asked for: an evaluation without them must leave the arrays
+  // as they are (a constant Jacobian is kept in them).
+  void df(int slot, double value) { if (slot >= 0 && out_.jacobian_requested) out_.df_dx[slot] += value; }
+  void dq(int slot, double value) { if (slot >= 0 && out_.jacobian_requested) out_.dq_dx[slot] += value; }
   void df(const Stamper::Block& b, double g) { df(b.aa, g), df(b.ab, -g), df(b.ba, -g), df(b.bb, g); }
   void dq(const Stamper::Block& b, double c) { dq(b.aa, c), dq(b.ab, -c), dq(b.ba, -c), dq(b.bb, c); }
 
@@ -177,6 +179,10 @@ class Device {
   // The connections in one mode (predicates p): an ideal switch or diode is a voltage-defined
   // branch when closed with RON = 0 and no connection when open with ROFF = infinite.
   virtual void mode_edges(const padae::Predicates& p, std::vector<Edge>& out) const { (void)p, edges(out); }
+
+  // Whether its derivatives depend on the predicates alone (padae::System::constant_jacobian):
+  // a linear element, a switch. A device that does not say so is taken to be nonlinear.
+  virtual bool constant_jacobian() const { return false; }
 
   // Predicates, numbered from `first` in the model's vector (see PredicateDevice).
   virtual int predicate_count() const { return 0; }

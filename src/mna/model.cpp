@@ -143,6 +143,7 @@ Model::Model(CircuitSpec circuit, const RunSettings& settings) : circuit_(std::m
     Device* d = device.get();
     if (d->time_dependent()) time_dependent_devices_.push_back(d);
     if (d->limits_newton_steps()) limiting_devices_.push_back(d);
+    constant_jacobian_ = constant_jacobian_ && d->constant_jacobian();
     if (d->predicate_count() == 0) continue;
     d->number_predicates(predicate_count_);
     predicate_owners_.insert(predicate_owners_.end(), d->predicate_count(), static_cast<int>(predicate_devices_.size()));

@@ -38,6 +38,9 @@ class Model final : public padae::System {
   bool time_event_rows(double t, std::vector<int>& rows) const override;
   double absolute_tolerance(int unknown, double default_atol) const override;
   double newton_step_fraction(const Vector& x, const Vector& x_next) const override;
+  // Every device's derivatives depend on the predicates alone. (Holding the .ic voltages changes
+  // the held rows' derivatives: it is set for the whole life of a solver, never within one.)
+  bool constant_jacobian() const override { return constant_jacobian_; }
 
   // The longest step that resolves every source's time dependence (a bound for
   // padae::Options::max_step: voltages that merely follow a source are not error-tested).
@@ -93,6 +96,7 @@ class Model final : public padae::System {
   std::vector<PredicateOwner> predicate_devices_;
   std::vector<const Device*> time_dependent_devices_;
   std::vector<const Device*> limiting_devices_;  // junctions
+  bool constant_jacobian_ = true;
   padae::Pattern pattern_;
   std::vector<padae::UnknownKind> kinds_;
   std::vector<padae::JumpEntry> jump_entries_;

@@ -73,6 +73,8 @@ EvalStatus NewtonMatrix::evaluate(double t, const Vector& x, const Predicates& p
 
 EvalStatus NewtonMatrix::load_with_derivatives(double t, const Vector& x, const Predicates& p,
                                                Load& out) {
+  // A constant Jacobian loaded in this mode is still in load_: evaluate() loads f and q alone.
+  if (&out == &load_ && derivatives_mode_ && *derivatives_mode_ == p) return evaluate(t, x, p);
   const int n = system_.size();
   if (out.f.size() != n) size_load(out, n, pattern_.nonzeros());
   out.f.setZero();
@@ -80,10 +82,19 @@ EvalStatus NewtonMatrix::load_with_derivatives(double t, const Vector& x, const 
   std::fill(out.df_dx.begin(), out.df_dx.end(), 0.0);
   std::fill(out.dq_dx.begin(), out.dq_dx.end(), 0.0);
   ++statistics_.jacobians;
-  if (!system_.analytic_jacobian()) return finite_difference_derivatives(t, x, p, out);
-  out.jacobian_requested = true;
-  ++statistics_.residual_evaluations;
-  return system_.load(t, x, p, out);
+  EvalStatus status = EvalStatus::ok;
+  if (system_.analytic_jacobian()) {
+    out.jacobian_requested = true;
+    ++statistics_.residual_evaluations;
+    status = system_.load(t, x, p, out);
+  } else {
+    status = finite_difference_derivatives(t, x, p, out);
+  }
+  if (&out == &load_) {
+    if (status == EvalStatus::ok && system_.constant_jacobian()) derivatives_mode_ = p;
+    else derivatives_mode_.reset();
+  }
+  return status;
 }
 
 EvalStatus NewtonMatrix::finite_difference_derivatives(double t, const Vector& x,
@@ -126,6 +137,9 @@ EvalStatus NewtonMatrix::finite_difference_derivatives(double t, const Vector& x
 NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Predicates& p,
                                            double cj, double keep_within) {
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
+  // A constant Jacobian factored in this mode at this cj: the factorization held is of this
+  // very matrix.
+  if (derivatives_mode_ && factored_mode_ == p && factored_cj_ == cj) return keep_within > 0 ? Outcome::kept : Outcome::ok;
   if (keep_within > 0 && drift(p, cj) <= keep_within) return Outcome::kept;
   for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
   const Outcome outcome = factor_loaded();
@@ -194,6 +208,7 @@ NewtonMatrix::Outcome NewtonMatrix::factor_blend(double t, const Vector& x,
   if (load_with_derivatives(t, x, p_from, blend_) != EvalStatus::ok ||
       load_with_derivatives(t, x, p_to, load_) != EvalStatus::ok)
     return Outcome::outside_domain;
+  derivatives_mode_.reset();  // load_ now holds the blend's
   const double keep = 1 - lambda;
   load_.f = keep * blend_.f + lambda * load_.f;
   load_.q = keep * blend_.q + lambda * load_.q;

@@ -3,6 +3,7 @@
 // Shared by the BDF corrector, the jump re-initialization and the steady-state solver.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "padae/integrator.hpp"
@@ -23,7 +24,9 @@ class NewtonMatrix {
   // is singular.
   enum class Outcome { ok, kept, outside_domain, singular };
   // keep_within > 0: keeps the factorization it holds (Outcome::kept) while its drift from the
-  // matrix loaded now is at most keep_within (see drift()).
+  // matrix loaded now is at most keep_within (see drift()). A constant Jacobian
+  // (System::constant_jacobian) is loaded once per mode, and a factorization of the same matrix
+  // (same mode, same cj) is not repeated.
   Outcome factor(double t, const Vector& x, const Predicates& p, double cj, double keep_within = 0);
   // df/dx + shift I: pseudo-transient continuation toward a steady state.
   Outcome factor_shifted(double t, const Vector& x, const Predicates& p, double shift);
@@ -92,6 +95,8 @@ class NewtonMatrix {
   Vector typical_;
   Predicates factored_mode_;
   double factored_cj_ = 0;  // 0: the factorization held is not of factor()'s form
+  // A constant Jacobian: the mode whose derivatives load_ holds (none before the first load).
+  std::optional<Predicates> derivatives_mode_;
 };
 
 }  // namespace padae

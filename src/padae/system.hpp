@@ -68,6 +68,12 @@ class System {
   // by finite differences on the pattern.
   virtual bool analytic_jacobian() const { return true; }
 
+  // Whether df/dx and dq/dx depend on p alone (f and q affine in x in every mode: a circuit of
+  // linear elements and switches). A solver then loads them once per mode and refactors only
+  // when the mode or the coefficient of dq/dx changes; it loads f and q alone at every other
+  // point.
+  virtual bool constant_jacobian() const { return false; }
+
   // Predicates. guard_k(t, x) > 0 <=> p_k; a guard must be continuous in t and x for fixed
   // auxiliary unknowns, so that its sign change can be located.
   virtual int predicate_count() const { return 0; }

@@ -113,6 +113,29 @@ TEST(BehavioralExpression, EqualityUsesTwoPredicates) {
   EXPECT_EQ(e.evaluate(0, x, above, nullptr), 0);
 }
 
+TEST(BehavioralExpression, ConstantGradientOnlyWhereAffineInEveryMode) {
+  Fixture fx;
+  auto constant_gradient = [&](netlist::ExpressionPtr e) { return BehavioralExpression(*e, fx.unknowns, "b1").constant_gradient(); };
+  auto add = [](auto l, auto r) { return binary(BinaryOperator::add, l, r); };
+  auto times = [](auto l, auto r) { return binary(BinaryOperator::multiply, l, r); };
+  auto over = [](auto l, auto r) { return binary(BinaryOperator::divide, l, r); };
+  // Affine with constant coefficients, forcing terms of time, conditions choosing among them.
+  EXPECT_TRUE(constant_gradient(add(times(number(2), voltage("a")), over(voltage("b"), number(3)))));
+  EXPECT_TRUE(constant_gradient(add(voltage("a"), call("sin", {times(number(6.28), time())}))));
+  EXPECT_TRUE(constant_gradient(conditional(binary(BinaryOperator::greater, voltage("a"), voltage("b")), number(5), number(-5))));
+  EXPECT_TRUE(constant_gradient(call("abs", {voltage("a", "b")})));
+  EXPECT_TRUE(constant_gradient(times(over(time(), number(2)), call("exp", {time()}))));
+  // Products and functions of unknowns, and coefficients varying in time.
+  EXPECT_FALSE(constant_gradient(times(voltage("a"), voltage("b"))));
+  EXPECT_FALSE(constant_gradient(times(voltage("a"), time())));
+  EXPECT_FALSE(constant_gradient(over(number(1), voltage("a"))));
+  EXPECT_FALSE(constant_gradient(over(voltage("a"), time())));
+  EXPECT_FALSE(constant_gradient(call("exp", {voltage("a")})));
+  EXPECT_FALSE(constant_gradient(binary(BinaryOperator::power, voltage("a"), number(2))));
+  EXPECT_FALSE(constant_gradient(conditional(binary(BinaryOperator::greater, voltage("a"), number(0)), voltage("a"),
+                                             call("tanh", {voltage("b")}))));
+}
+
 TEST(BehavioralExpression, UnknownReferencesAreErrors) {
   Fixture fx;
   EXPECT_THROW(BehavioralExpression(*voltage("nowhere"), fx.unknowns, "b1"), ModelError);

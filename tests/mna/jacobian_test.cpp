@@ -89,6 +89,57 @@ TEST(Jacobian, EveryDeviceMatchesFiniteDifferencesInEveryMode) {
   }
 }
 
+// The devices that say their derivatives depend on the predicates alone: the same Jacobians at
+// every (t, x) of a mode, and each mode's their own.
+CircuitSpec linear_devices() {
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}, 1.0).waveform = {Waveform::Shape::sine, {0, 1, 1e3}};
+  c.add("r1", {"in", "a"}, 10.0);
+  c.add("c1", {"a", "b"}, 1e-6);
+  c.add("l1", {"b", "0"}, 1e-3);
+  c.add("l2", {"c", "0"}, 2e-3);
+  c.add("k1", {}, 0.9).controls = {"l1", "l2"};
+  c.add("i1", {"c", "0"}, 1e-3).waveform = {Waveform::Shape::sine, {0, 1e-3, 2e3}};
+  c.add("e1", {"d", "0", "a", "b"}, 2.0);
+  c.add("g1", {"d", "0", "a", "0"}, 1e-3);
+  c.add("f1", {"c", "0"}, 0.5).controls = {"v1"};
+  c.add("h1", {"e", "0"}, 3.0).controls = {"l1"};
+  c.add("d2", {"a", "d"}).model = {{"ideal", 1}, {"ron", 0.5}, {"roff", 1e5}, {"vfwd", 0.3}};
+  c.add("s1", {"a", "e", "b", "0"}).model = {{"vt", 0.5}, {"vh", 0.1}};
+  c.add("s2", {"b", "d", "a", "0"}).model = {{"ron", 0.0}};
+  // A comparator choosing between affine expressions, one with a time-varying term.
+  auto& b1 = c.add("b1", {"f", "0"});
+  b1.expression = conditional(binary(BinaryOperator::greater, voltage("a"), voltage("d")),
+                              binary(BinaryOperator::add, binary(BinaryOperator::multiply, number(2), voltage("b")),
+                                     call("sin", {time()})),
+                              binary(BinaryOperator::divide, current("l1"), number(4)));
+  c.add("r2", {"f", "0"}, 1.0);
+  return c;
+}
+
+TEST(Jacobian, DevicesClaimingAConstantJacobianHaveOneInEveryMode) {
+  Model model(linear_devices(), {.tstep = 1e-5, .tstop = 1e-3});
+  ASSERT_TRUE(model.constant_jacobian());
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> value(-0.9, 0.9);
+  for (int mask = 0; mask < (1 << model.predicate_count()); ++mask) {
+    padae::Predicates p(model.predicate_count());
+    for (int k = 0; k < model.predicate_count(); ++k) p[k] = (mask >> k) & 1;
+    std::vector<DenseLoad> loads;
+    for (int trial = 0; trial < 3; ++trial) {
+      Vector x(model.size());
+      for (int i = 0; i < model.size(); ++i) x[i] = value(random);
+      loads.push_back(evaluate(model, 1e-4 * (1 + value(random)), x, p));
+    }
+    for (const DenseLoad& load : loads) {
+      EXPECT_EQ(load.df, loads.front().df) << "predicates " << mask;
+      EXPECT_EQ(load.dq, loads.front().dq) << "predicates " << mask;
+    }
+  }
+  // Junctions, MOSFETs and nonlinear B sources do not claim it.
+  EXPECT_FALSE(Model(every_device(), {.tstep = 1e-5, .tstop = 1e-3}).constant_jacobian());
+}
+
 TEST(Jacobian, DiodeAcrossItsRegionsAndExponentLimit) {
   CircuitSpec c;
   c.add("d1", {"a", "0"}).model = {{"is", 1e-14}, {"cjo", 1e-12}, {"bv", 10.0}};

@@ -330,6 +330,46 @@ TEST(Events, ACircuitPaysOnlyForWhatItUses) {
   EXPECT_EQ(integrator.statistics().events, 0);
 }
 
+// x' = p - x, p = (t < 1): affine in x in both modes, x = 1 - e^-t, then (1 - e^-1) e^-(t - 1).
+class SwitchedRelaxation : public SemiExplicitSystem {
+ public:
+  explicit SwitchedRelaxation(bool claims_constant_jacobian)
+      : SemiExplicitSystem({D}), claims_constant_jacobian_(claims_constant_jacobian) {}
+  EvalStatus equations(double, const Vector& z, const Predicates& p, Vector& out) override {
+    out[0] = p[0] - z[0];
+    return EvalStatus::ok;
+  }
+  bool constant_jacobian() const override { return claims_constant_jacobian_; }
+  int predicate_count() const override { return 1; }
+  EvalStatus guards(double t, const Vector&, Vector& out) const override {
+    out[0] = 1 - t;
+    return EvalStatus::ok;
+  }
+
+ private:
+  bool claims_constant_jacobian_;
+};
+
+TEST(Events, AConstantJacobianIsLoadedOncePerModeAndSolver) {
+  const double exact = (1 - std::exp(-1.0)) * std::exp(-1.0);
+  long jacobians_loaded_anyway = 0;
+  for (bool claimed : {false, true}) {
+    SwitchedRelaxation model(claimed);
+    Integrator integrator(model, precise());
+    ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
+    ASSERT_TRUE(run_until(integrator, 2.0)) << integrator.failure().reason;
+    EXPECT_NEAR(integrator.state()[0], exact, 1e-8);
+    EXPECT_EQ(integrator.statistics().events, 1);
+    if (!claimed) {
+      jacobians_loaded_anyway = integrator.statistics().jacobians;
+      continue;
+    }
+    // Two modes, two solvers that load derivatives (the steps' and the event locator's).
+    EXPECT_LE(integrator.statistics().jacobians, 4);
+    EXPECT_GT(jacobians_loaded_anyway, 20);  // what the claim saves
+  }
+}
+
 // x'' = -x for x > 0 and x'' = -4 x for x < 0: half periods of pi and pi/2, and |x'| = 1 at
 // every crossing of x = 0 (the potential is zero there on both sides). Started at x = sin 0.5,
 // x' = cos 0.5: downward crossings at pi - 0.5 + k 3pi/2, upward ones pi/2 later.

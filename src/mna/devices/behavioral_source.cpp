@@ -35,6 +35,7 @@ class BehavioralSource final : public PredicateDevice {
     slots_a_.resize(inputs.size());
     for (std::size_t k = 0; k < inputs.size(); ++k) s.entry(branch_, inputs[k], slots_a_[k]);
   }
+  bool constant_jacobian() const override { return expression_->constant_gradient(); }
   void load(Evaluation& e) const override {
     const std::uint8_t* p = e.p.data() + first_predicate();
     const double value = expression_->evaluate(e.t, e.x, p, e.jacobian() ? gradient_.data() : nullptr);

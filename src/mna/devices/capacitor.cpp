@@ -14,6 +14,7 @@ class Capacitor final : public Device {
   }
   void allocate(Unknowns& u) override { a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]); }
   void declare(Stamper& s) override { s.charge_block(a_, b_, slots_); }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const double q = capacitance_ * (e.value(a_) - e.value(b_));
     e.q(a_, q), e.q(b_, -q);

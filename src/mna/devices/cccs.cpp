@@ -15,6 +15,7 @@ class Cccs final : public Device {
     control_ = s.unknowns().branch(card().controls[0]);
     s.entry(a_, control_, slot_a_), s.entry(b_, control_, slot_b_);
   }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const double i = gain_ * e.value(control_);
     e.f(a_, i), e.f(b_, -i);

@@ -20,6 +20,7 @@ class Ccvs final : public Device {
     s.entry(branch_, a_, slot_branch_a_), s.entry(branch_, b_, slot_branch_b_);
     s.entry(branch_, control_, slot_branch_control_);
   }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const double i = e.value(branch_);
     e.f(a_, i), e.f(b_, -i);

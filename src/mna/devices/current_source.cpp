@@ -13,6 +13,7 @@ class CurrentSource final : public Device {
   }
   void allocate(Unknowns& u) override { a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]); }
   void declare(Stamper&) override {}
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const double i = function_.value(e.t);
     e.f(a_, i), e.f(b_, -i);

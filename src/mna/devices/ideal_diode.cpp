@@ -30,6 +30,7 @@ class IdealDiode final : public PredicateDevice {
     s.entry(branch_, a_, slot_branch_a_), s.entry(branch_, k_, slot_branch_k_);
     s.entry(branch_, branch_, slot_branch_branch_);
   }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const bool on = e.p[first_predicate()];
     const double v = e.value(a_) - e.value(k_), i = e.value(branch_);

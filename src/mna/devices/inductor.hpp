@@ -12,6 +12,7 @@ class Inductor final : public Device {
   explicit Inductor(const ElementSpec& spec);
   void allocate(Unknowns& u) override;
   void declare(Stamper& s) override;
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override;
   void edges(std::vector<Edge>& out) const override;
   double stored_energy(const Vector& x) const override;

@@ -19,6 +19,7 @@ class MutualInductance final : public Device {
     branch1_ = l1->branch(), branch2_ = l2->branch();
     s.charge_entry(branch1_, branch2_, slot12_), s.charge_entry(branch2_, branch1_, slot21_);
   }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     e.q(branch1_, -mutual_ * e.value(branch2_)), e.q(branch2_, -mutual_ * e.value(branch1_));
     if (e.jacobian()) e.dq(slot12_, -mutual_), e.dq(slot21_, -mutual_);

@@ -13,6 +13,7 @@ class Resistor final : public Device {
   }
   void allocate(Unknowns& u) override { a_ = u.node(card().nodes[0]), b_ = u.node(card().nodes[1]); }
   void declare(Stamper& s) override { s.block(a_, b_, slots_); }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const double i = conductance_ * (e.value(a_) - e.value(b_));
     e.f(a_, i), e.f(b_, -i);

@@ -47,6 +47,7 @@ class Switch final : public PredicateDevice {
     s.entry(branch_, a_, slot_branch_a_), s.entry(branch_, b_, slot_branch_b_);
     s.entry(branch_, branch_, slot_branch_branch_);
   }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const bool on = e.p[first_predicate()];
     const double v = e.value(a_) - e.value(b_);

@@ -16,6 +16,7 @@ class Vccs final : public Device {
     s.entry(n_[0], n_[2], slots_[0]), s.entry(n_[0], n_[3], slots_[1]);
     s.entry(n_[1], n_[2], slots_[2]), s.entry(n_[1], n_[3], slots_[3]);
   }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const double i = gain_ * (e.value(n_[2]) - e.value(n_[3]));
     e.f(n_[0], i), e.f(n_[1], -i);

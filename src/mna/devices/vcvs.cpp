@@ -17,6 +17,7 @@ class Vcvs final : public Device {
     s.entry(n_[0], branch_, slot_a_branch_), s.entry(n_[1], branch_, slot_b_branch_);
     for (int k = 0; k < 4; ++k) s.entry(branch_, n_[k], slot_row_[k]);
   }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const double i = e.value(branch_);
     e.f(n_[0], i), e.f(n_[1], -i);

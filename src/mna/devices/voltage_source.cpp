@@ -19,6 +19,7 @@ class VoltageSource final : public Device {
     s.entry(a_, branch_, slot_a_branch_), s.entry(b_, branch_, slot_b_branch_);
     s.entry(branch_, a_, slot_branch_a_), s.entry(branch_, b_, slot_branch_b_);
   }
+  bool constant_jacobian() const override { return true; }
   void load(Evaluation& e) const override {
     const double i = e.value(branch_);
     e.f(a_, i), e.f(b_, -i);

@@ -490,6 +490,9 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
   }
 
   const double toldel = 1e-4 * kNewtonTolerance;
+  // Affine equations on their exact matrix: no other matrix judges convergence better, and the
+  // last correction was the rounding's refinement.
+  const bool exact_matrix = newton.factored_exactly(p, cj);
   double first_norm = 0;
   for (int m = 0, m_first = 0;; ++m) {
     ++statistics.newton_iterations;
@@ -511,8 +514,9 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
     }
     if (!converged && m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;
     // q at the new point, which the history needs exactly (charge conservation).
-    if (!converged) {
+    if (!converged || exact_matrix) {
       if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return NewtonOutcome::outside_domain;
+      if (exact_matrix && converged) break;
       continue;
     }
     // A convergence judged from a remembered rate must really hold: the next correction, on a

@@ -57,6 +57,12 @@ class NewtonMatrix {
   // precision.
   bool within_roundoff(const Vector& v, double tolerances, const Vector& inverse_weight, double roundoffs,
                        const Vector& x, const Vector& other_terms) const;
+  // Whether the factorization held is of df/dx + cj dq/dx in mode p exactly: a constant
+  // Jacobian factored in that mode at that cj, on which Newton solves the (affine) equations in
+  // one correction.
+  bool factored_exactly(const Predicates& p, double cj) const {
+    return system_.constant_jacobian() && factored_cj_ == cj && factored_mode_ == p;
+  }
   int singular_column() const { return lu_.singular_column(); }
   int determinant_sign() const { return lu_.determinant_sign(); }
   bool is_auxiliary(int unknown) const { return auxiliary_[unknown]; }

@@ -33,7 +33,8 @@ void expect_jacobians_match_differences(Model& model, const Vector& x, const pad
   }
 }
 
-CircuitSpec every_device() {
+// The devices whose derivatives depend on the predicates alone (Device::constant_jacobian).
+CircuitSpec linear_devices() {
   CircuitSpec c;
   c.add("v1", {"in", "0"}, 1.0).waveform = {Waveform::Shape::sine, {0, 1, 1e3}};
   c.add("r1", {"in", "a"}, 10.0);
@@ -46,13 +47,25 @@ CircuitSpec every_device() {
   c.add("g1", {"d", "0", "a", "0"}, 1e-3);
   c.add("f1", {"c", "0"}, 0.5).controls = {"v1"};
   c.add("h1", {"e", "0"}, 3.0).controls = {"l1"};
-  auto& d = c.add("d1", {"e", "a"});
-  d.model = {{"is", 1e-12}, {"n", 1.2}, {"rs", 2.0}, {"cjo", 1e-12}, {"tt", 1e-9}, {"bv", 5.0}};
   c.add("d2", {"a", "d"}).model = {{"ideal", 1}, {"ron", 0.5}, {"roff", 1e5}, {"vfwd", 0.3}};
   c.add("d3", {"d", "e"}).model = {{"ideal", 1}};
   c.add("s1", {"a", "e", "b", "0"}).model = {{"vt", 0.5}, {"vh", 0.1}};
   c.add("s2", {"b", "d", "a", "0"}).model = {{"ron", 0.0}};
   c.add("w1", {"c", "e"}).controls = {"v1"};
+  // A comparator choosing between affine expressions, one with a time-varying term.
+  auto& b3 = c.add("b3", {"g", "0"});
+  b3.expression = conditional(binary(BinaryOperator::greater, voltage("a"), voltage("d")),
+                              binary(BinaryOperator::add, binary(BinaryOperator::multiply, number(2), voltage("b")),
+                                     call("sin", {time()})),
+                              binary(BinaryOperator::divide, current("l1"), number(4)));
+  c.add("r3", {"g", "0"}, 1.0);
+  return c;
+}
+
+CircuitSpec every_device() {
+  CircuitSpec c = linear_devices();
+  auto& d = c.add("d1", {"e", "a"});
+  d.model = {{"is", 1e-12}, {"n", 1.2}, {"rs", 2.0}, {"cjo", 1e-12}, {"tt", 1e-9}, {"bv", 5.0}};
   // B sources: a smooth nonlinear current and a voltage with conditions and kinks.
   auto& b1 = c.add("b1", {"e", "0"});
   b1.expression_is_current = true;
@@ -90,33 +103,7 @@ TEST(Jacobian, EveryDeviceMatchesFiniteDifferencesInEveryMode) {
 }
 
 // The devices that say their derivatives depend on the predicates alone: the same Jacobians at
-// every (t, x) of a mode, and each mode's their own.
-CircuitSpec linear_devices() {
-  CircuitSpec c;
-  c.add("v1", {"in", "0"}, 1.0).waveform = {Waveform::Shape::sine, {0, 1, 1e3}};
-  c.add("r1", {"in", "a"}, 10.0);
-  c.add("c1", {"a", "b"}, 1e-6);
-  c.add("l1", {"b", "0"}, 1e-3);
-  c.add("l2", {"c", "0"}, 2e-3);
-  c.add("k1", {}, 0.9).controls = {"l1", "l2"};
-  c.add("i1", {"c", "0"}, 1e-3).waveform = {Waveform::Shape::sine, {0, 1e-3, 2e3}};
-  c.add("e1", {"d", "0", "a", "b"}, 2.0);
-  c.add("g1", {"d", "0", "a", "0"}, 1e-3);
-  c.add("f1", {"c", "0"}, 0.5).controls = {"v1"};
-  c.add("h1", {"e", "0"}, 3.0).controls = {"l1"};
-  c.add("d2", {"a", "d"}).model = {{"ideal", 1}, {"ron", 0.5}, {"roff", 1e5}, {"vfwd", 0.3}};
-  c.add("s1", {"a", "e", "b", "0"}).model = {{"vt", 0.5}, {"vh", 0.1}};
-  c.add("s2", {"b", "d", "a", "0"}).model = {{"ron", 0.0}};
-  // A comparator choosing between affine expressions, one with a time-varying term.
-  auto& b1 = c.add("b1", {"f", "0"});
-  b1.expression = conditional(binary(BinaryOperator::greater, voltage("a"), voltage("d")),
-                              binary(BinaryOperator::add, binary(BinaryOperator::multiply, number(2), voltage("b")),
-                                     call("sin", {time()})),
-                              binary(BinaryOperator::divide, current("l1"), number(4)));
-  c.add("r2", {"f", "0"}, 1.0);
-  return c;
-}
-
+// every (t, x) of a mode.
 TEST(Jacobian, DevicesClaimingAConstantJacobianHaveOneInEveryMode) {
   Model model(linear_devices(), {.tstep = 1e-5, .tstop = 1e-3});
   ASSERT_TRUE(model.constant_jacobian());

@@ -490,8 +490,8 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
   }
 
   const double toldel = 1e-4 * kNewtonTolerance;
-  // Affine equations on their exact matrix: no other matrix judges convergence better, and the
-  // last correction was the rounding's refinement.
+  // Affine equations on their exact matrix: what contraction is left there is the rounding's, and
+  // no other matrix would judge convergence better.
   const bool exact_matrix = newton.factored_exactly(p, cj);
   double first_norm = 0;
   for (int m = 0, m_first = 0;; ++m) {
@@ -513,10 +513,10 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
       converged = convergence_factor * norm <= kNewtonTolerance;
     }
     if (!converged && m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;
-    // q at the new point, which the history needs exactly (charge conservation).
     if (!converged || exact_matrix) {
+      // q at the new point, which the history needs exactly (charge conservation).
       if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return NewtonOutcome::outside_domain;
-      if (exact_matrix && converged) break;
+      if (converged) break;  // on the exact matrix: no confirming correction
       continue;
     }
     // A convergence judged from a remembered rate must really hold: the next correction, on a

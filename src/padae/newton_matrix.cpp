@@ -137,9 +137,7 @@ EvalStatus NewtonMatrix::finite_difference_derivatives(double t, const Vector& x
 NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Predicates& p,
                                            double cj, double keep_within) {
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
-  // A constant Jacobian factored in this mode at this cj: the factorization held is of this
-  // very matrix.
-  if (derivatives_mode_ && factored_mode_ == p && factored_cj_ == cj) return keep_within > 0 ? Outcome::kept : Outcome::ok;
+  if (factored_exactly(p, cj)) return keep_within > 0 ? Outcome::kept : Outcome::ok;
   if (keep_within > 0 && drift(p, cj) <= keep_within) return Outcome::kept;
   for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
   const Outcome outcome = factor_loaded();

@@ -34,6 +34,7 @@
 #include "padae/norms.hpp"
 #include "padae/reinitialization.hpp"
 #include "padae/root_finder.hpp"
+#include "padae/subnormals.hpp"
 #include "padae/text.hpp"
 
 namespace padae {
@@ -1199,6 +1200,7 @@ bool Integrator::initialize(double t0, const Vector& x0) {
 }
 
 bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
+  SubnormalsFlushed flushed;
   Impl& s = *impl_;
   if (x0.size() != s.n || static_cast<int>(p0.size()) != s.predicate_count) {
     s.failure = Failure{t0, "initial state has the wrong size", -1};
@@ -1221,7 +1223,10 @@ bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   return true;
 }
 
-StepOutcome Integrator::step(double t_stop) { return impl_->step(t_stop); }
+StepOutcome Integrator::step(double t_stop) {
+  SubnormalsFlushed flushed;
+  return impl_->step(t_stop);
+}
 double Integrator::time() const { return impl_->t; }
 const Vector& Integrator::state() const { return impl_->x; }
 const Predicates& Integrator::predicates() const { return impl_->p; }
@@ -1235,6 +1240,7 @@ const Statistics& Integrator::output_statistics() const { return impl_->output_s
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
 Vector Integrator::dense_output(double t_at) { return dense_output(t_at, impl_->every_unknown); }
 const Vector& Integrator::dense_output(double t_at, std::span<const int> unknowns) {
+  SubnormalsFlushed flushed;
   Impl& s = *impl_;
   if (const Vector* located = s.remembered_solution(t_at)) return *located;
   if (s.polynomial_serves(unknowns)) {

@@ -5,6 +5,7 @@
 
 #include "padae/newton_matrix.hpp"
 #include "padae/norms.hpp"
+#include "padae/subnormals.hpp"
 
 namespace padae {
 
@@ -107,6 +108,7 @@ class SteadyStateSolver {
 
 SteadyState steady_state(System& system, double t, const Vector& x_guess, const Predicates& p0,
                          const Options& options) {
+  SubnormalsFlushed flushed;
   SteadyState result;
   SteadyStateSolver solver(system, t, options);
   result.x = x_guess;

@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
 #include "padae/newton_matrix.hpp"
 #include "padae/semi_explicit.hpp"
 #include "padae/steady_state.hpp"
+#include "padae/subnormals.hpp"
 #include "run_until.hpp"
 
 namespace padae {
@@ -737,6 +739,45 @@ TEST(Integrator, ModelOutsideItsDomainCutsTheStepAndTheRunSucceeds) {
   ASSERT_TRUE(run_until(integrator, 10.0)) << integrator.failure().reason;
   EXPECT_NEAR(integrator.state()[0], std::exp(-10.0), 1e-4 * std::exp(-10.0));
   EXPECT_GT(integrator.statistics().rejected_domain, 0);
+}
+
+// Whether the arithmetic in effect reads the smallest subnormal as zero (volatile: computed at
+// run time, in the floating-point mode of the moment).
+bool subnormals_read_as_zero() {
+  volatile double subnormal = std::numeric_limits<double>::denorm_min();
+  volatile double one = 1.0;
+  return subnormal * one == 0.0;
+}
+
+// x' = -x, noting whether every evaluation ran with subnormals flushed.
+class DecayWatchingSubnormals : public SemiExplicitSystem {
+ public:
+  DecayWatchingSubnormals() : SemiExplicitSystem({D}) {}
+  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
+    ++evaluations;
+    if (!subnormals_read_as_zero()) ++evaluations_with_subnormals;
+    out[0] = -z[0];
+    return EvalStatus::ok;
+  }
+  int evaluations = 0;
+  int evaluations_with_subnormals = 0;
+};
+
+TEST(Integrator, SolvesWithSubnormalsFlushedAndLeavesTheCallersModeAlone) {
+  if (!SubnormalsFlushed::supported) GTEST_SKIP() << "no flush-to-zero mode on this processor";
+  ASSERT_FALSE(subnormals_read_as_zero());
+  DecayWatchingSubnormals decay;
+  Options options;
+  SteadyState bias = steady_state(decay, 0.0, Vector::Constant(1, 1.0), {}, options);
+  ASSERT_TRUE(bias.converged) << bias.message;
+  EXPECT_FALSE(subnormals_read_as_zero());
+  Integrator integrator(decay, options);
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+  ASSERT_TRUE(run_until(integrator, 1.0, [](const StepOutcome&) { EXPECT_FALSE(subnormals_read_as_zero()); }));
+  integrator.dense_output(0.5);
+  EXPECT_FALSE(subnormals_read_as_zero());
+  EXPECT_GT(decay.evaluations, 0);
+  EXPECT_EQ(decay.evaluations_with_subnormals, 0);
 }
 
 // The finite-difference Jacobian (pattern-coloured) agrees with the analytic one.

@@ -17,6 +17,8 @@
 
 #include <unistd.h>
 
+#include <fmt/format.h>
+
 #include "cli/output/waveform_writer.hpp"
 
 namespace fs = std::filesystem;
@@ -63,7 +65,8 @@ std::vector<std::string> split(const std::string& s, char sep) {
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 // Values that break naive formatting: non-terminating binary fractions, extremes, subnormals,
-// negative zero, neighbours of round numbers.
+// negative zero, neighbours of round numbers; and what waveforms hold: grid times, integers,
+// powers of ten at the edges of fixed notation.
 std::vector<double> tricky_values() {
   std::vector<double> v = {0.1, 1.0 / 3.0, -2.0 / 3.0, M_PI, 1e-300, 5e-324, 2.2250738585072014e-308,
                            -0.0, 0.0, 1.7976931348623157e308, 1e23, 9007199254740993.0,
@@ -73,6 +76,8 @@ std::vector<double> tricky_values() {
   std::uniform_real_distribution<double> mant(-1.0, 1.0);
   std::uniform_int_distribution<int> exp(-300, 300);
   for (int k = 0; k < 2000; ++k) v.push_back(std::ldexp(mant(rng), exp(rng)));
+  for (int k = 0; k < 200; ++k) v.push_back(k * 1e-8);
+  for (double p = 1e-7; p < 1e18; p *= 10) v.insert(v.end(), {p, -p, 1.5 * p, 123 * p});
   for (int k = 0; k < 200; ++k) {  // random bit patterns (finite only)
     std::uint64_t bits = rng();
     double d;
@@ -99,6 +104,8 @@ TEST(CsvWriter, HeaderAndBitIdenticalRoundTrip) {
   auto lines = lines_of(slurp(path));
   ASSERT_EQ(lines.size(), 1 + values.size() / 2);
   EXPECT_EQ(lines[0], "time,v(out),i(l1)");
+  // Each number reads back to the same bits, and is written as fmt writes "{}": its shortest
+  // digits, in fixed notation for powers of ten -4 to 15.
   for (std::size_t r = 1; r < lines.size(); ++r) {
     std::size_t k = 2 * (r - 1);
     auto fields = split(lines[r], ',');
@@ -109,6 +116,7 @@ TEST(CsvWriter, HeaderAndBitIdenticalRoundTrip) {
       double got = std::strtod(fields[c].c_str(), &end);
       EXPECT_EQ(*end, '\0') << fields[c];
       EXPECT_TRUE(same_bits(got, expect[c])) << fields[c] << " vs " << expect[c];
+      EXPECT_EQ(fields[c], fmt::format("{}", expect[c]));
     }
   }
 }

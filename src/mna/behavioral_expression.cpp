@@ -166,10 +166,12 @@ int BehavioralExpression::compile(const netlist::Expression& e, const Unknowns& 
       case BinaryOperator::multiply: return emit({.op = Op::multiply, .a = l, .b = r});
       case BinaryOperator::divide: return emit({.op = Op::divide, .a = l, .b = r});
       case BinaryOperator::power: return emit({.op = Op::power, .a = l, .b = r});
-      case BinaryOperator::greater:
-      case BinaryOperator::greater_equal: return greater(l, r, lt + ">" + rt);
-      case BinaryOperator::less:
-      case BinaryOperator::less_equal: return greater(r, l, rt + ">" + lt);
+      case BinaryOperator::greater: return greater(l, r, lt + ">" + rt);
+      case BinaryOperator::less: return greater(r, l, rt + ">" + lt);
+      // A predicate holds where its guard is positive: l >= r where r > l does not, so that the
+      // two sides' equality (a source resting at a threshold) counts.
+      case BinaryOperator::greater_equal: return emit({.op = Op::logical_not, .a = greater(r, l, rt + ">" + lt)});
+      case BinaryOperator::less_equal: return emit({.op = Op::logical_not, .a = greater(l, r, lt + ">" + rt)});
       case BinaryOperator::equal:
       case BinaryOperator::not_equal: {
         const int above = greater(l, r, lt + ">" + rt), below = greater(r, l, rt + ">" + lt);

@@ -113,6 +113,34 @@ TEST(BehavioralExpression, EqualityUsesTwoPredicates) {
   EXPECT_EQ(e.evaluate(0, x, above, nullptr), 0);
 }
 
+// A predicate holds where its guard is positive; at equality (a source resting at the threshold)
+// >= and <= are true, > and < false, as in ngspice.
+TEST(BehavioralExpression, NonStrictComparisonsHoldAtEquality) {
+  Fixture fx;
+  Vector x(2);
+  x << 1, 1;
+  auto value_at = [&](BinaryOperator op, const Vector& at) {
+    BehavioralExpression e(*conditional(binary(op, voltage("a"), voltage("b")), number(1), number(0)), fx.unknowns, "b1");
+    std::vector<double> guards(static_cast<std::size_t>(e.predicate_count()));
+    e.guards(0, at, guards.data());
+    padae::Predicates p(guards.size());
+    for (std::size_t k = 0; k < guards.size(); ++k) p[k] = guards[k] > 0;
+    return e.evaluate(0, at, p.data(), nullptr);
+  };
+  EXPECT_EQ(value_at(BinaryOperator::greater_equal, x), 1);
+  EXPECT_EQ(value_at(BinaryOperator::less_equal, x), 1);
+  EXPECT_EQ(value_at(BinaryOperator::greater, x), 0);
+  EXPECT_EQ(value_at(BinaryOperator::less, x), 0);
+  Vector above(2);
+  above << 2, 1;
+  EXPECT_EQ(value_at(BinaryOperator::greater_equal, above), 1);
+  EXPECT_EQ(value_at(BinaryOperator::less_equal, above), 0);
+  Vector below(2);
+  below << 0, 1;
+  EXPECT_EQ(value_at(BinaryOperator::greater_equal, below), 0);
+  EXPECT_EQ(value_at(BinaryOperator::less_equal, below), 1);
+}
+
 TEST(BehavioralExpression, ConstantGradientOnlyWhereAffineInEveryMode) {
   Fixture fx;
   auto constant_gradient = [&](netlist::ExpressionPtr e) { return BehavioralExpression(*e, fx.unknowns, "b1").constant_gradient(); };

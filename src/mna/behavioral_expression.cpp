@@ -54,6 +54,12 @@ bool is_condition(const netlist::Expression& e) {
   return false;
 }
 
+// ngspice's stand-ins where its B-source functions are infinite: a divisor of exactly 0 is
+// PTfudge_factor (GMIN 1e-12 times 1e-20), and ln(0) = log10(0) = -1e99. Newton's first point
+// (every node at 0) is often such a point.
+constexpr double kZeroDivisor = 1e-32;
+constexpr double kLogOfZero = -1e99;
+
 // ngspice's power: |x|^y unless y is a whole number.
 double power(double x, double y) { return x < 0 && y != std::round(y) ? std::pow(-x, y) : std::pow(x, y); }
 
@@ -254,7 +260,11 @@ void BehavioralExpression::forward(double t, const Vector& x, const std::uint8_t
       case Op::add: value = a + b, d = {1, 1, 0}; break;
       case Op::subtract: value = a - b, d = {1, -1, 0}; break;
       case Op::multiply: value = a * b, d = {b, a, 0}; break;
-      case Op::divide: value = a / b, d = {1 / b, -a / (b * b), 0}; break;
+      case Op::divide: {
+        const double divisor = b != 0 ? b : kZeroDivisor;
+        value = a / divisor, d = {1 / divisor, -a / (divisor * divisor), 0};
+        break;
+      }
       case Op::power:
         value = power(a, b);
         d[0] = a == 0 ? (b == 1 ? 1 : 0) : b * value / a;  // at 0: x^b is flat for b > 1 (b < 1: its infinite slope is left out)
@@ -276,9 +286,11 @@ void BehavioralExpression::forward(double t, const Vector& x, const std::uint8_t
         d = {0, a != 0 ? 1.0 : 0.0, a != 0 ? 0.0 : 1.0};
         break;
       case Op::exp: value = std::exp(a), d[0] = value; break;
-      case Op::log: value = std::log(a), d[0] = 1 / a; break;
-      case Op::log10: value = std::log10(a), d[0] = 1 / (a * std::log(10.0)); break;
-      case Op::sqrt: value = std::sqrt(a), d[0] = 0.5 / value; break;
+      // At 0 their slope is infinite and left out, as x^b's for b < 1; the logarithm of 0 is
+      // ngspice's -1e99 there.
+      case Op::log: value = a != 0 ? std::log(a) : kLogOfZero, d[0] = a != 0 ? 1 / a : 0; break;
+      case Op::log10: value = a != 0 ? std::log10(a) : kLogOfZero, d[0] = a != 0 ? 1 / (a * std::log(10.0)) : 0; break;
+      case Op::sqrt: value = std::sqrt(a), d[0] = a != 0 ? 0.5 / value : 0; break;
       case Op::sin: value = std::sin(a), d[0] = std::cos(a); break;
       case Op::cos: value = std::cos(a), d[0] = -std::sin(a); break;
       case Op::tan: value = std::tan(a), d[0] = 1 + value * value; break;

@@ -709,6 +709,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
   int error_test_failures = 0, newton_failures = 0;
   std::array<RejectedAttempt, kMaxErrorTestFailures> rejected;  // the first error_test_failures
   int blamed = -1;  // the worst unknown of the last rejected attempt: what shrinks the step
+  bool left_domain = false;  // whether the last rejected attempt could not evaluate the model
   double error = 0, error_k = 0, error_k_minus_1 = 0;
   int order_new = order;
   bool ends_at_target = false;
@@ -724,7 +725,9 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       // Without a rejection here the accepted steps' error estimates shrank it.
       if (blamed < 0) weighted_max_norm(correction_q, inverse_weight_q, &blamed);
       return fail(t, "step size " + format_number(h, 17) + " s fell below the minimum step (" + format_number(minimum_step(), 3) +
-                         " s) at t = " + format_number(t, 17), blamed);
+                         " s) at t = " + format_number(t, 17) +
+                         (left_domain ? ": the model cannot be evaluated (outside its domain) at the steps tried" : ""),
+                  blamed);
     }
     rescale_first_step();
     set_coefficients();
@@ -741,6 +744,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     if (correction == NewtonOutcome::diverged && !fresh) correction = correct(t_new, Newton::modified_fresh);
     if (correction == NewtonOutcome::diverged) correction = correct(t_new, Newton::full);
 
+    left_domain = correction == NewtonOutcome::outside_domain;
     if (correction != NewtonOutcome::converged) {
       restore();
       if (correction == NewtonOutcome::outside_domain) ++statistics.rejected_domain;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "padae/newton_matrix.hpp"
 #include "padae/norms.hpp"
@@ -28,9 +29,12 @@ class SteadyStateSolver {
   // Newton on f(t, x, p) = 0 (shift = 0), or on (x - x_previous) shift + f = 0.
   bool newton(Vector& x, const Vector& x_previous, const Predicates& p, double shift) {
     const Vector held = x;
+    left_domain_at_.reset();
     double previous_norm = std::numeric_limits<double>::infinity();
     for (int iteration = 0; iteration < kMaxNewtonIterations; ++iteration) {
-      if (newton_.factor_shifted(t_, x, p, shift) != NewtonMatrix::Outcome::ok) {
+      const NewtonMatrix::Outcome outcome = newton_.factor_shifted(t_, x, p, shift);
+      if (outcome != NewtonMatrix::Outcome::ok) {
+        if (outcome == NewtonMatrix::Outcome::outside_domain && iteration > 0) left_domain_at_ = x;
         worst_ = newton_.singular_column();
         return false;
       }
@@ -93,6 +97,8 @@ class SteadyStateSolver {
   }
 
   int worst() const { return worst_; }
+  // The iterate at which the last newton() left the model's domain, if it did.
+  const std::optional<Vector>& left_domain_at() const { return left_domain_at_; }
 
  private:
   System& system_;
@@ -102,6 +108,7 @@ class SteadyStateSolver {
   Vector absolute_tolerance_;
   NewtonMatrix newton_;
   int worst_ = -1;
+  std::optional<Vector> left_domain_at_;
 };
 
 }  // namespace
@@ -124,6 +131,17 @@ SteadyState steady_state(System& system, double t, const Vector& x_guess, const 
   for (int iteration = 0; iteration < options.max_event_iterations; ++iteration) {
     Vector x = result.x;
     if (!solver.newton(x, x, result.p, 0.0)) {
+      // Newton left the model's domain: a mode's branch taken past its guard (abs(v) = -v where
+      // v > 0, under a sqrt). The guards where it left choose the modes to go on in.
+      if (const auto& left = solver.left_domain_at(); left && system.predicate_count() > 0) {
+        Predicates there = result.p;
+        if (solver.guards(*left, there) && there != result.p) {
+          result.x = *left;
+          solver.jump(result.x, result.p, there);
+          result.p = there;
+          continue;
+        }
+      }
       x = result.x;
       if (!solver.pseudo_transient(x, result.p)) {
         result.message = "no steady state: Newton's method and pseudo-transient continuation fail";

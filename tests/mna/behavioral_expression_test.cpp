@@ -89,6 +89,27 @@ TEST(BehavioralExpression, GradientIsExactForSmoothFunctions) {
   EXPECT_NEAR(gradient[1], ddb, 1e-14);
 }
 
+// Where ngspice's functions are infinite, its stand-ins: a zero divisor is 1e-32, ln(0) is
+// -1e99; and sqrt's infinite slope at 0 is left out, as x^0.5's.
+TEST(BehavioralExpression, SingularPointsHaveNgspicesFiniteStandIns) {
+  Fixture fx;
+  Vector x = Vector::Zero(2);
+  double gradient[1];
+  auto at_zero = [&](netlist::ExpressionPtr e) {
+    const double value = BehavioralExpression(*e, fx.unknowns, "b1").evaluate(0, x, nullptr, gradient);
+    return std::pair{value, gradient[0]};
+  };
+  EXPECT_EQ(at_zero(call("sqrt", {voltage("a")})), std::pair(0.0, 0.0));
+  EXPECT_EQ(at_zero(call("ln", {voltage("a")})), std::pair(-1e99, 0.0));
+  EXPECT_EQ(at_zero(call("log10", {voltage("a")})), std::pair(-1e99, 0.0));
+  const auto [quotient, slope] = at_zero(binary(BinaryOperator::divide, number(2), voltage("a")));
+  EXPECT_DOUBLE_EQ(quotient, 2e32);
+  EXPECT_DOUBLE_EQ(slope, -2e64);
+  x[0] = 4;  // elsewhere the functions themselves
+  EXPECT_EQ(at_zero(call("sqrt", {voltage("a")})), std::pair(2.0, 0.25));
+  EXPECT_EQ(at_zero(binary(BinaryOperator::divide, number(2), voltage("a"))), std::pair(0.5, -0.125));
+}
+
 TEST(BehavioralExpression, DeadBranchNeverPoisonsTheGradient) {
   Fixture fx;
   // v(a) > 0 ? sqrt(v(a)) : 0, evaluated at v(a) < 0 with the predicate off

@@ -307,10 +307,12 @@ TEST(DeviceLoad, MosfetBulkJunctionsAreNgspices) {
 }
 
 TEST(DeviceLoad, NonFiniteValuesOrDerivativesAreOutsideTheDomain) {
-  // B1: v(out) = sqrt(v(in)): its slope is infinite at 0 and it has no value below.
+  // B1: v(out) = atan2(v(in), 0) + sqrt(v(in)): atan2's slope is undefined at (0, 0), and sqrt
+  // has no value below 0.
   CircuitSpec c;
   c.add("v1", {"in", "0"}, 0.0);
-  c.add("b1", {"out", "0"}).expression = call("sqrt", {voltage("in")});
+  c.add("b1", {"out", "0"}).expression =
+      binary(netlist::BinaryOperator::add, call("atan2", {voltage("in"), number(0)}), call("sqrt", {voltage("in")}));
   c.add("r1", {"out", "0"}, 1.0);
   Model m(c, {});
   padae::Load load;

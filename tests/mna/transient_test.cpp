@@ -370,6 +370,31 @@ TEST(Start, ControlledSourcesOperatingPoint) {
   EXPECT_NEAR(x[unknown(m, "v(f)")], -6.0, 1e-12);  // 3 * -2 mA into f
 }
 
+TEST(Start, OperatingPointThroughFunctionsThatAreInfiniteAtTheFirstGuess) {
+  // v(in) = 2 V; Newton starts with every node at 0, where sqrt's slope, ln and 1/x are
+  // infinite; and abs(v(in)) starts on its branch for v(in) < 0, whose -v(in) takes sqrt
+  // outside its domain as soon as v(in) moves to 2.
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}, 2.0);
+  c.add("r1", {"in", "0"}, 1e3);
+  auto add_source = [&](const std::string& name, netlist::ExpressionPtr expression) {
+    c.add("b" + name, {name, "0"}).expression = std::move(expression);
+    c.add("r" + name, {name, "0"}, 1e3);
+  };
+  add_source("root", call("sqrt", {voltage("in")}));
+  add_source("log", call("ln", {voltage("in")}));
+  add_source("inverse", binary(netlist::BinaryOperator::divide, number(1), voltage("in")));
+  add_source("rootabs", call("sqrt", {call("abs", {voltage("in")})}));
+  Model m(c, {.tstep = 1e-6, .tstop = 1e-5});
+  const Simulation run = simulate(m, 1e-5, false);
+  ASSERT_TRUE(run.ok) << run.failure;
+  const Vector& x = run.states.front();
+  EXPECT_NEAR(x[unknown(m, "v(root)")], std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(x[unknown(m, "v(log)")], std::log(2.0), 1e-12);
+  EXPECT_NEAR(x[unknown(m, "v(inverse)")], 0.5, 1e-12);
+  EXPECT_NEAR(x[unknown(m, "v(rootabs)")], std::sqrt(2.0), 1e-12);
+}
+
 TEST(Start, ShockleyDiodeOperatingPointSatisfiesItsEquation) {
   // 5 V through 1 k into a diode: i = IS (exp(v / (N Vt)) - 1) + GMIN v = (5 - v) / 1 k.
   CircuitSpec c;

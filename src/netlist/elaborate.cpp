@@ -525,7 +525,7 @@ class Elaborator {
     static const std::map<std::string, std::pair<ModelType, std::vector<std::string>>> known = {
         {"d",
          {ModelType::diode,
-          {"is", "n", "rs", "cjo", "cj0", "vj", "m", "tt", "bv", "ibv", "eg", "xti", "fc", "ideal",
+          {"is", "n", "rs", "cjo", "cj0", "vj", "m", "tt", "bv", "ibv", "nbv", "eg", "xti", "fc", "ideal",
            "ron", "roff", "vfwd"}}},
         {"sw", {ModelType::voltage_switch, {"vt", "vh", "ron", "roff", "ideal"}}},
         {"csw", {ModelType::current_switch, {"it", "ih", "ron", "roff", "ideal"}}},
@@ -821,8 +821,22 @@ class Elaborator {
       if (!area) return;
       element.value = *area;
     }
+    // ngspice 39 writes the area as area=..., older SPICEs after the model name.
+    std::vector<ast::Assignment> parameters;
+    for (const ast::Assignment& parameter : card.parameters) {
+      if (parameter.name.text != "area") {
+        parameters.push_back(parameter);
+      } else if (card.area) {
+        diagnostics_.error(parameter.name.where, "diode " + element.name + ": the area is given twice");
+        return;
+      } else if (auto area = value(parameter.value, *instance.scope)) {
+        element.value = *area;
+      } else {
+        return;
+      }
+    }
     element.off = card.off;
-    element_parameters(card.parameters, element, "diode", instance);
+    element_parameters(parameters, element, "diode", instance);
     if (!model) return;
     element.model = *model;
     add(std::move(element));

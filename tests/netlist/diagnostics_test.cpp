@@ -87,6 +87,7 @@ const Malformed malformed[] = {
     {"t\nR1 a b {v(a)}\n", 2, 9, "a node voltage is only allowed in a B source expression"},
     {"t\nR1 a b {1/0}\n", 2, 9, "the value is not a finite number"},
     {"t\nR1 a b 1 m=2\n", 2, 10, "unknown parameter 'm' for resistor r1"},
+    {"t\nD1 a 0 dm 2 area=3\n.model dm d\n", 2, 13, "diode d1: the area is given twice"},
     {"t\nV1 a 0 pwl(0 0 2 1 1 0)\n", 2, 20, "pwl times must not decrease"},
     {"t\nV1 a 0 pwl(0 0 1 1) r=0.5\n", 2, 23, "pwl r= must be one of the time points"},
 };

@@ -287,6 +287,16 @@ TEST(Elaborate, SwitchedBuck) {
   EXPECT_EQ(circuit.find_option("nosuch"), nullptr);
 }
 
+// The area factor after the model name (SPICE2/3) or as area= (ngspice 39); 1 if not written.
+TEST(Elaborate, DiodeAreaEitherPositionalOrKeyword) {
+  FlatCircuit circuit = elaborate_text("t\nD1 a 0 dm 3\nD2 a 0 dm area=2.5\nD3 a 0 dm\n"
+                                       ".model dm d(is=1e-14 bv=5 nbv=1.5)\n");
+  EXPECT_EQ(element(circuit, "d1").value, 3.0);
+  EXPECT_EQ(element(circuit, "d2").value, 2.5);
+  EXPECT_EQ(element(circuit, "d3").value, 1.0);
+  EXPECT_TRUE(circuit.warnings.empty());  // nbv is a diode parameter
+}
+
 TEST(Elaborate, OptionsAreKeptWhateverTheirName) {
   FlatCircuit circuit = elaborate_text("t\n.options padsim_order=3 noinit\n.option method=trap\n"
                                        ".options padsim_order=4\n");

@@ -293,7 +293,11 @@ class Session {
       else if (!flat->saves.empty()) probes_ = requested_probes(flat->saves, *model_);
       else probes_ = default_probes(*model_);
     } catch (const mna::ModelError& e) {
-      print_error(e.what());
+      const netlist::FlatElement* element = e.element().empty() ? nullptr : flat->find_element(e.element());
+      if (element && element->where.begin.file)
+        fmt::print(stderr, "{}", netlist::format({netlist::Severity::error, element->where, e.what()}));
+      else
+        print_error(e.what());
       return bad_input;
     }
     return success;

@@ -23,7 +23,14 @@ using padae::Vector;
 // Bad input found while building the model (unknown element, missing controlling source,
 // structurally singular circuit): the command exits with status 2.
 class ModelError : public std::runtime_error {
-  using std::runtime_error::runtime_error;
+ public:
+  explicit ModelError(const std::string& message, std::string element = "")
+      : std::runtime_error(message), element_(std::move(element)) {}
+  // The element at fault, where there is one: the command points at its card.
+  const std::string& element() const { return element_; }
+
+ private:
+  std::string element_;
 };
 
 constexpr int ground = -1;  // the index of the reference node: never an unknown

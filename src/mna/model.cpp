@@ -106,17 +106,30 @@ Model::Model(CircuitSpec circuit, const RunSettings& settings) : circuit_(std::m
   // Circuit nodes first, in order of appearance, so that v(...) unknowns come first.
   for (const auto& spec : circuit_.elements)
     for (const auto& n : spec.nodes) unknowns_.node(n);
+  // What one element's values or connections get wrong names it.
+  auto for_element = [](const std::string& name, auto&& action) {
+    try {
+      action();
+    } catch (const ModelError& e) {
+      if (!e.element().empty()) throw;
+      throw ModelError(e.what(), name);
+    }
+  };
   std::unordered_set<std::string> names;
   for (const auto& spec : circuit_.elements) {
-    if (!names.insert(spec.name).second) throw ModelError("element '" + spec.name + "' is defined twice");
-    const DeviceFactory* factory = DeviceRegistry::instance().find(registry_key(spec));
-    if (!factory) throw ModelError("element '" + spec.name + "': unsupported element type");
-    devices_.push_back((*factory)(spec, settings, device_memory_));
+    for_element(spec.name, [&] {
+      if (!names.insert(spec.name).second) throw ModelError("element '" + spec.name + "' is defined twice");
+      const DeviceFactory* factory = DeviceRegistry::instance().find(registry_key(spec));
+      if (!factory) throw ModelError("element '" + spec.name + "': unsupported element type");
+      devices_.push_back((*factory)(spec, settings, device_memory_));
+    });
   }
-  for (auto& d : devices_) d->allocate(unknowns_);
+  for (std::size_t k = 0; k < devices_.size(); ++k)
+    for_element(circuit_.elements[k].name, [&] { devices_[k]->allocate(unknowns_); });
 
   Stamper stamper(unknowns_, devices_);
-  for (auto& d : devices_) d->declare(stamper);
+  for (std::size_t k = 0; k < devices_.size(); ++k)
+    for_element(circuit_.elements[k].name, [&] { devices_[k]->declare(stamper); });
   for (const auto& [name, value] : circuit_.initial_voltages) {
     const int n = find_node(name);
     if (n == -2) throw ModelError(".ic names node '" + name + "', which is not in the circuit");

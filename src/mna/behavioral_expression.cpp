@@ -60,8 +60,8 @@ bool is_condition(const netlist::Expression& e) {
 constexpr double kZeroDivisor = 1e-32;
 constexpr double kLogOfZero = -1e99;
 
-// ngspice's power: |x|^y unless y is a whole number.
-double power(double x, double y) { return x < 0 && y != std::round(y) ? std::pow(-x, y) : std::pow(x, y); }
+// ngspice's power (PTpower): |x|^y, whatever y; pwr(x, y) is the signed one.
+double power(double x, double y) { return std::pow(std::abs(x), y); }
 
 }  // namespace
 
@@ -268,7 +268,7 @@ void BehavioralExpression::forward(double t, const Vector& x, const std::uint8_t
       case Op::power:
         value = power(a, b);
         d[0] = a == 0 ? (b == 1 ? 1 : 0) : b * value / a;  // at 0: x^b is flat for b > 1 (b < 1: its infinite slope is left out)
-        d[1] = a > 0 ? value * std::log(a) : 0;
+        d[1] = a != 0 ? value * std::log(std::abs(a)) : 0;
         break;
       case Op::greater:
         if (p) {

@@ -2,13 +2,14 @@
 // differentiation) for fixed predicates, and a guard for every condition inside it.
 //
 // Conditions become predicates (predicate-dae.md, section 3): each comparison a > b is one
-// predicate with guard a - b (a < b: b - a; >= and <= differ only on the boundary; == and !=
+// predicate with guard a - b (a < b: b - a; a >= b is not b > a, true on the boundary; == and !=
 // use the two predicates a > b and b > a). Kinks lower to ternaries on predicates:
 // abs(x) = x > 0 ? x : -x, min, max, u, uramp, sgn, limit, pwr. A number used as a condition
 // means "non-zero". For fixed predicates the expression is smooth; both branches of a ternary
 // are evaluated (their guards exist whatever the predicate), but only the live one counts.
 // floor and ceil are piecewise constant with unbounded jump count: no predicate, zero slope.
-// `^`, `**` and pow(x, y) follow ngspice: |x|^y unless y is an integer.
+// `^`, `**` and pow(x, y) follow ngspice 39: |x|^y, also for a whole y ((-2)^3 = 8); pwr(x, y)
+// is sgn(x) |x|^y.
 #pragma once
 
 #include <array>

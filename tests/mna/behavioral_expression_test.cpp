@@ -110,6 +110,20 @@ TEST(BehavioralExpression, SingularPointsHaveNgspicesFiniteStandIns) {
   EXPECT_EQ(at_zero(binary(BinaryOperator::divide, number(2), voltage("a"))), std::pair(0.5, -0.125));
 }
 
+// ngspice 39's PTpower: |x|^y for every y, so (-2)^3 = 8 (pwr is the signed power).
+TEST(BehavioralExpression, PowerIsOfTheMagnitudeAsInNgspice) {
+  Fixture fx;
+  Vector x(2);
+  x << -2, 3;
+  double gradient[2];
+  BehavioralExpression cube(*binary(BinaryOperator::power, voltage("a"), voltage("b")), fx.unknowns, "b1");
+  EXPECT_DOUBLE_EQ(cube.evaluate(0, x, nullptr, gradient), 8);
+  EXPECT_DOUBLE_EQ(gradient[0], -12);                 // d|a|^b/da = b |a|^(b-1) sgn(a)
+  EXPECT_DOUBLE_EQ(gradient[1], 8 * std::log(2.0));  // d|a|^b/db = |a|^b ln|a|
+  BehavioralExpression root(*call("pow", {voltage("a"), number(0.5)}), fx.unknowns, "b1");
+  EXPECT_DOUBLE_EQ(root.evaluate(0, x, nullptr, nullptr), std::sqrt(2.0));
+}
+
 TEST(BehavioralExpression, DeadBranchNeverPoisonsTheGradient) {
   Fixture fx;
   // v(a) > 0 ? sqrt(v(a)) : 0, evaluated at v(a) < 0 with the predicate off

@@ -194,6 +194,18 @@ struct Integrator::Impl {
   // --- events ----------------------------------------------------------------------------
   bool evaluate_guards(double t_at, const Vector& x_at, Vector& out) const;
   bool crossed(const Vector& guards) const;
+  // A guard that crosses and crosses back between two instants of the last step where none is
+  // crossed: the earliest instant found where one is, with the guards there; nullopt if none.
+  struct GuardSample {
+    double t;
+    Vector guards;
+  };
+  std::optional<GuardSample> crossing_inside(double t_left, const Vector& guards_left, double t_right,
+                                             const Vector& guards_right);
+  // The guards on the solution at t_at, if one is crossed there.
+  std::optional<GuardSample> confirmed_crossing(double t_at);
+  Vector screened_guards;               // scratch of crossing_inside()
+  std::vector<double> screened_times;   // scratch of crossing_inside()
   DenseOutput& locator();
   StepOutcome handle_state_event(double t_left, const Vector& guards_left, double t_right,
                                  const Vector& guards_right);
@@ -805,9 +817,13 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       if (!evaluate_guards(passed, located_solution(passed), guards_passed))
         return fail(passed, "a guard function cannot be evaluated at t = " + format_number(passed, 17));
       if (crossed(guards_passed)) return handle_state_event(t_left, guards_left, passed, guards_passed);
+      if (auto inside = crossing_inside(t_left, guards_left, passed, guards_passed))
+        return handle_state_event(t_left, guards_left, inside->t, inside->guards);
       t_left = passed;
       guards_left = std::move(guards_passed);
     }
+    if (auto inside = crossing_inside(t_left, guards_left, t, guards_new))
+      return handle_state_event(t_left, guards_left, inside->t, inside->guards);
     if (crossed(guards_new)) return handle_state_event(t_left, guards_left, t, guards_new);
     guards_now = guards_new;
   }
@@ -840,6 +856,43 @@ bool Integrator::Impl::crossed(const Vector& guards) const {
   for (int k = 0; k < predicate_count; ++k)
     if ((guards[k] > 0) != (p[k] != 0)) return true;
   return false;
+}
+
+// A clamp's ideal diode conducts for a microsecond at the peak of a sine that a step crossed in
+// five: its guard is back below zero at the step's end. Screened on the step's polynomial (no
+// solve): at the midpoint, and, for a guard whose margin (positive once crossed) bends down
+// between the ends, at the vertex of the parabola through its margins at the ends and the
+// midpoint. A crossing seen there is confirmed on the solution, which the event location then
+// uses.
+std::optional<Integrator::Impl::GuardSample> Integrator::Impl::crossing_inside(double t_left, const Vector& guards_left,
+                                                                                double t_right, const Vector& guards_right) {
+  const double half = 0.5 * (t_right - t_left), t_middle = t_left + half;
+  Vector& guards = screened_guards;
+  guards.resize(predicate_count);
+  if (!evaluate_guards(t_middle, interpolate(t_middle), guards)) return std::nullopt;
+  if (crossed(guards)) return confirmed_crossing(t_middle);
+  std::vector<double>& vertices = screened_times;
+  vertices.clear();
+  for (int k = 0; k < predicate_count; ++k) {
+    const double sign = p[k] ? -1.0 : 1.0;
+    const double before = sign * guards_left[k], at = sign * guards[k], after = sign * guards_right[k];
+    const double curvature = before - 2 * at + after;
+    if (!(curvature < 0)) continue;
+    const double offset = 0.5 * (before - after) / curvature;  // in half steps
+    if (std::abs(offset) < 1 && at - 0.25 * (before - after) * offset > 0) vertices.push_back(t_middle + offset * half);
+  }
+  std::sort(vertices.begin(), vertices.end());
+  for (double t_at : vertices) {
+    if (!evaluate_guards(t_at, interpolate(t_at), guards)) return std::nullopt;
+    if (crossed(guards)) return confirmed_crossing(t_at);
+  }
+  return std::nullopt;
+}
+
+std::optional<Integrator::Impl::GuardSample> Integrator::Impl::confirmed_crossing(double t_at) {
+  Vector guards(predicate_count);
+  if (!evaluate_guards(t_at, located_solution(t_at), guards) || !crossed(guards)) return std::nullopt;
+  return GuardSample{t_at, std::move(guards)};
 }
 
 DenseOutput& Integrator::Impl::locator() {

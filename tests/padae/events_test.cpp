@@ -46,6 +46,49 @@ Options precise() {
   return options;
 }
 
+// x' = cos t, so x = sin t, and p = (x > 0.9999): true for 0.028 about t = pi / 2, a fraction
+// of the steps sin t allows. The guard is negative at both ends of the step that crosses the
+// window; the crossing and the return must still be found. x's global error there is a few tens
+// of rtol, and the instants' that over the slope there, cos t = 0.014.
+class BriefWindow : public SemiExplicitSystem {
+ public:
+  BriefWindow() : SemiExplicitSystem({D}) {}
+  EvalStatus equations(double t, const Vector&, const Predicates&, Vector& out) override {
+    out[0] = std::cos(t);
+    return EvalStatus::ok;
+  }
+  static constexpr double kLevel = 0.9999;
+  int predicate_count() const override { return 1; }
+  EvalStatus guards(double, const Vector& z, Vector& out) const override {
+    out[0] = z[0] - kLevel;
+    return EvalStatus::ok;
+  }
+};
+
+TEST(Events, AGuardThatCrossesAndComesBackInsideOneStepIsFound) {
+  for (double rtol : {1e-4, 1e-5, 1e-6}) {
+    BriefWindow model;
+    Options options;
+    options.rtol = rtol;
+    options.atol = rtol;
+    Integrator integrator(model, options);
+    ASSERT_TRUE(integrator.initialize(0.0, Vector::Zero(1))) << integrator.failure().reason;
+    std::vector<double> event_times;
+    double longest_step = 0, previous = 0;
+    ASSERT_TRUE(run_until(integrator, 3.0, [&](const StepOutcome& outcome) {
+      if (outcome.kind == StepKind::event) event_times.push_back(outcome.t);
+      longest_step = std::max(longest_step, outcome.t - previous);
+      previous = outcome.t;
+    })) << integrator.failure().reason;
+    const double enter = std::asin(BriefWindow::kLevel), leave = std::numbers::pi - enter;
+    EXPECT_GT(longest_step, 2 * (leave - enter)) << "rtol " << rtol;
+    ASSERT_EQ(event_times.size(), 2u) << "rtol " << rtol;
+    const double resolution = 100 * rtol / std::cos(enter);
+    EXPECT_NEAR(event_times[0], enter, resolution) << "rtol " << rtol;
+    EXPECT_NEAR(event_times[1], leave, resolution) << "rtol " << rtol;
+  }
+}
+
 TEST(Events, AnEventAtTheInitialTime) {
   // x(0) = 0 sits on the switching surface and the motion leaves it upward at once: the
   // predicate is true from t0 + 0 (settled while initializing, or as an event at t0).

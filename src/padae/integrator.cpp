@@ -931,7 +931,8 @@ StepOutcome Integrator::Impl::handle_state_event(double t_left, const Vector& gu
     t = t_event;
     x = x_before;
     return fail(t_event, "event accumulation at t = " + format_number(limit, 17) + ": the intervals between events of predicate " + which +
-                             " shrink to zero (Zeno behaviour); stopped at t = " + format_number(t_event, 17));
+                             " shrink to zero (Zeno behaviour, or chattering where both modes head across the switching"
+                             " surface); stopped at t = " + format_number(t_event, 17));
   }
 
   t = t_event;
@@ -953,6 +954,9 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
   std::vector<JumpEntry> jump_entries;
   std::optional<ConsistentState> consistent;
   const double h_reference = h > 0 ? h : first_step_estimate(t_at, x_start);
+  std::vector<Predicates> left_modes;  // the fixed point's modes so far
+  std::size_t flips_to_first_mode = 0;  // the flips recorded when left_modes.front() was reached
+  bool back_to_first_mode = false;
 
   for (int iteration = 1;; ++iteration) {
     if (iteration > options.max_event_iterations) {
@@ -976,11 +980,12 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
         if (!newton.is_auxiliary(entry.row)) last_event.jumped = true;
       }
     }
+    if (back_to_first_mode) last_event.flips.resize(flips_to_first_mode);
     const std::size_t flips_before = last_event.flips.size();
     for (int k = 0; k < predicate_count; ++k) {
       if (target[k] == p[k]) continue;
       flipped_here[k] = 1;
-      if (record_flips) last_event.flips.push_back({k, p[k] != 0, target[k] != 0});
+      if (record_flips && !back_to_first_mode) last_event.flips.push_back({k, p[k] != 0, target[k] != 0});
     }
     Predicates previous = p;
     p = target;
@@ -1007,7 +1012,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
                         reinitializer.failure_unknown()};
       return false;
     }
-    if (predicate_count == 0) break;
+    if (predicate_count == 0 || back_to_first_mode) break;
     // Convention (9) for the new mode. A predicate that flipped here is judged by where the new
     // motion is heading (just after t): its new guard starts at zero up to the old guard's
     // resolution, amplified by the new mode (an ideal diode's current is its voltage error
@@ -1031,6 +1036,18 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       next[k] = p[k] ? (on_side || rising) : (on_side && rising);
     }
     if (next == p) break;
+    // A mode the fixed point has left already: at a tangency (a clamp's ideal diode turning off
+    // at a sine's peak, where its current and its voltage reach their thresholds together) the
+    // new guards' headings are rounding, and each mode sends it to the other. The first mode
+    // the located crossing led to decides: the motion goes on in it, and a real return is an
+    // event of its own.
+    if (left_modes.empty()) flips_to_first_mode = last_event.flips.size();
+    left_modes.push_back(p);
+    if (std::find(left_modes.begin(), left_modes.end(), next) != left_modes.end()) {
+      if (p == left_modes.front()) break;
+      back_to_first_mode = true;
+      next = left_modes.front();
+    }
     target = next;
   }
   last_event.x_after = consistent->x;

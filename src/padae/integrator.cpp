@@ -957,6 +957,11 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
   std::vector<Predicates> left_modes;  // the fixed point's modes so far
   std::size_t flips_to_first_mode = 0;  // the flips recorded when left_modes.front() was reached
   bool back_to_first_mode = false;
+  // A mode without a consistent state whose guards name no other change: its single flips are
+  // tried in turn, from the predicates the event itself did not flip.
+  std::optional<Predicates> stalled_mode;
+  std::vector<char> flipped_by_event;
+  int next_single_flip = 0;
 
   for (int iteration = 1;; ++iteration) {
     if (iteration > options.max_event_iterations) {
@@ -970,6 +975,8 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       return false;
     }
     last_event.iterations = iteration;
+    const Vector x_unjumped = x_jumped;  // what a retry in another mode jumps from
+    const bool jumped_before = last_event.jumped;
     if (system.has_jumps() && target != p) {
       jump_entries.clear();
       system.jump_matrix(t_at, x_jumped, p, jump_entries);
@@ -1002,9 +1009,28 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
         if (rescue != p) {
           p = previous;
           target = rescue;
+          x_jumped = x_unjumped;
+          last_event.jumped = jumped_before;
           last_event.flips.resize(flips_before);  // recorded again with the rescued mode
           continue;
         }
+      }
+      // No guard there says which: the mode with one more predicate flipped, each in turn. An
+      // ideal switch closing across a conducting ideal diode, both without resistance or
+      // forward voltage, leaves the split of the current between them undetermined; with the
+      // diode off it is not, and the diode's guard (its voltage, 0) keeps it off.
+      if (!stalled_mode) stalled_mode = p, flipped_by_event = flipped_here;
+      while (next_single_flip < predicate_count && flipped_by_event[next_single_flip]) ++next_single_flip;
+      if (next_single_flip < predicate_count) {
+        target = *stalled_mode;
+        target[next_single_flip] = !target[next_single_flip];
+        ++next_single_flip;
+        p = previous;
+        x_jumped = x_unjumped;
+        last_event.jumped = jumped_before;
+        flipped_here = flipped_by_event;
+        last_event.flips.resize(flips_before);
+        continue;
       }
     }
     if (!consistent) {

@@ -272,6 +272,30 @@ TEST(Jump, InductorFreewheelsThroughIdealDiodeWhenSwitchOpens) {
   EXPECT_NEAR(run.states.back()[i], i1 * std::exp(-1e-3 / tau), 1e-5 * i1);
 }
 
+TEST(Jump, IdealSwitchClosingAcrossAConductingIdealDiodeTurnsItOff) {
+  // 1 mA flows into a and down through an ideal diode (no forward voltage, no resistance). At
+  // 1 ms (the control ramp crossing 0.5 V) an ideal switch closes across it: with both on the
+  // current's split is undetermined; with the diode off the switch carries it, a stays at 0 V
+  // and the diode's guard (its voltage, 0) keeps it off: the synchronous rectifier's switch
+  // turning on while its body diode freewheels.
+  CircuitSpec c;
+  ramp_control(c, 0, 1);
+  c.add("i1", {"0", "a"}, 1e-3);
+  c.add("r1", {"a", "0"}, 1e6);  // the operating point's path before the diode is found on
+  c.add("d1", {"a", "0"}).model = {{"ideal", 1}};
+  ideal_switch(c, "s1", "a", "0");
+  Model m(c, {.tstep = 1e-5, .tstop = 2e-3});
+  const Simulation run = simulate(m, 2e-3, false);
+  ASSERT_TRUE(run.ok) << run.failure;
+  ASSERT_EQ(run.events.size(), 1u);
+  EXPECT_NEAR(run.events[0].t, 1e-3, 1e-12);
+  const int is = unknown(m, "i(s1)"), id = unknown(m, "i(d1)"), a = unknown(m, "v(a)");
+  EXPECT_NEAR(run.events[0].x_before[id], 1e-3, 1e-12);
+  EXPECT_NEAR(run.states.back()[is], 1e-3, 1e-12);
+  EXPECT_NEAR(run.states.back()[id], 0, 1e-12);
+  EXPECT_NEAR(run.states.back()[a], 0, 1e-12);
+}
+
 TEST(Events, IdealDiodeClampConductsAtEveryPeakOfTheSine) {
   // A DC restorer: C couples a 5 V, 10 kHz sine to out, an ideal diode (VFWD 0.3) clamps out at
   // 0.3 V, RL loads out (tau = RL C = 0.1 s). The diode conducts from where out reaches 0.3 V

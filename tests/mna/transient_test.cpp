@@ -388,6 +388,24 @@ TEST(Events, SwitchHysteresisThresholdsAreHitExactly) {
   EXPECT_NEAR(run.events[1].x_after[out], 1e6 / (1e6 + 1), 1e-12);
 }
 
+TEST(Events, SwitchControlRestingAtAThresholdKeepsTheState) {
+  // ngspice's rule: on above VT + VH, off below VT - VH, the state kept at either threshold.
+  // The control rises to VT - VH = 0.5 V exactly and rests (off stays off), goes to 2 V (on at
+  // VT + VH = 1.5 V, t = 2 ms + 2/3 ms), and comes back to 0.5 V exactly and rests (on stays
+  // on).
+  CircuitSpec c;
+  c.add("vctl", {"ctl", "0"}).waveform = {Waveform::Shape::piecewise_linear, {0, 0, 1e-3, 0.5, 2e-3, 0.5, 3e-3, 2, 4e-3, 0.5}};
+  c.add("v1", {"in", "0"}, 1.0);
+  c.add("r1", {"in", "out"}, 1.0);
+  c.add("s1", {"out", "0", "ctl", "0"}).model = {{"vt", 1.0}, {"vh", 0.5}, {"ron", 1.0}, {"roff", 1e6}};
+  Model m(c, {.tstep = 1e-5, .tstop = 6e-3});
+  const Simulation run = simulate(m, 6e-3, false);
+  ASSERT_TRUE(run.ok) << run.failure;
+  ASSERT_EQ(run.events.size(), 1u);
+  EXPECT_NEAR(run.events[0].t, 2e-3 + 1e-3 / 1.5, 1e-12);
+  EXPECT_NEAR(run.states.back()[unknown(m, "v(out)")], 0.5, 1e-12);
+}
+
 TEST(Events, ComparatorAndTimeConditionsInBehavioralSource) {
   // out = v(in) > 0.5 ? 1 : 0 with v(in) = 1000 t, plus u(time - 0.3 ms) * 2 V.
   using netlist::BinaryOperator;

@@ -1,7 +1,9 @@
 // S (voltage-controlled) and W (current-controlled) switches with ngspice's semantics: on above
-// VT + VH, off below VT - VH, in between the state is kept. The state is an auxiliary unknown
-// (a mode that only events change); one predicate says "on" with a guard on the control:
-//     guard = state ? c - (VT - VH) : c - (VT + VH)
+// VT + VH, off below VT - VH, in between, and at either threshold, the state is kept. The state
+// is an auxiliary unknown (a mode that only events change); one predicate says "on" with a guard
+// on the control, positive where the switch is on:
+//     guard = state ? c - below(VT - VH) : c - (VT + VH)
+// below(x) the double just below x, so that a control resting at VT - VH keeps the switch on.
 // RON = 0 or ROFF = infinite make the switch ideal (IDEAL=1 makes them the defaults, since a
 // netlist cannot write infinity); then it carries a branch current i and its
 // row reads alpha(p) (va - vb) - beta(p) i = 0 with (alpha, beta) = (1/R, 1), or (1, 0) for
@@ -29,6 +31,7 @@ class Switch final : public PredicateDevice {
     if (!(on_resistance_ >= 0) || !(off_resistance_ > on_resistance_) || !std::isfinite(on_resistance_))
       throw ModelError("switch '" + spec.name + "': need 0 <= RON < ROFF, RON finite");
     ideal_ = on_resistance_ == 0 || std::isinf(off_resistance_);
+    off_below_ = std::nextafter(threshold_ - hysteresis_, -infinity);
   }
 
   void allocate(Unknowns& u) override {
@@ -78,7 +81,7 @@ class Switch final : public PredicateDevice {
   void guards(double, const Vector& x, double* out) const override {
     const double control = current_controlled_ ? x[c_] : value(x, c_) - value(x, d_);
     const bool state = x[state_] > 0.5;
-    out[0] = state ? control - (threshold_ - hysteresis_) : control - (threshold_ + hysteresis_);
+    out[0] = state ? control - off_below_ : control - (threshold_ + hysteresis_);
   }
   // The state follows the predicate: +1 when it turns on, -1 when it turns off.
   void jump_entries(std::vector<padae::JumpEntry>& out) const override {
@@ -89,6 +92,7 @@ class Switch final : public PredicateDevice {
  private:
   bool current_controlled_;
   double threshold_, hysteresis_, on_resistance_, off_resistance_;
+  double off_below_;  // the largest control that turns the switch off: just below VT - VH
   bool initially_on_;
   bool ideal_ = false;
   int a_ = ground, b_ = ground, c_ = ground, d_ = ground, branch_ = ground, state_ = ground;

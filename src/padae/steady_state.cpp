@@ -166,7 +166,9 @@ SteadyState steady_state(System& system, double t, const Vector& x_guess, const 
     solver.jump(result.x, result.p, next);
     result.p = next;
   }
-  result.message = "the predicates do not settle at a steady state (they keep flipping)";
+  result.message =
+      "the predicates do not settle at a steady state (they keep flipping: an oscillator has none; start it from "
+      "initial conditions)";
   return result;
 }
 

@@ -1063,10 +1063,10 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     }
     if (next == p) break;
     // A mode the fixed point has left already: at a tangency (a clamp's ideal diode turning off
-    // at a sine's peak, where its current and its voltage reach their thresholds together) the
-    // new guards' headings are rounding, and each mode sends it to the other. The first mode
-    // the located crossing led to decides: the motion goes on in it, and a real return is an
-    // event of its own.
+    // where its current and its voltage reach their thresholds together) each mode's heading is
+    // off by the solution's tolerance, and each sends it to the other. The first mode the
+    // located crossing led to decides: the motion goes on in it, and a real return is an event
+    // of its own.
     if (left_modes.empty()) flips_to_first_mode = last_event.flips.size();
     left_modes.push_back(p);
     if (std::find(left_modes.begin(), left_modes.end(), next) != left_modes.end()) {

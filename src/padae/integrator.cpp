@@ -493,12 +493,15 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
     if (outcome == NewtonOutcome::converged) q_new = newton.load().q;
     return outcome;
   }
+  // A predictor outside the model's domain (a source that touches 0 under a sqrt, extrapolated
+  // below it) is no reason to cut the step: Newton starts from the step's start instead.
   if (mode == Newton::modified_fresh) {
-    const auto factored = newton.factor(t_new, x_new, p, cj);
+    auto factored = newton.factor(t_new, x_new, p, cj);
+    if (factored == NewtonMatrix::Outcome::outside_domain) factored = newton.factor(t_new, x_new = x, p, cj);
     if (factored == NewtonMatrix::Outcome::outside_domain) return NewtonOutcome::outside_domain;
     if (factored == NewtonMatrix::Outcome::singular) return NewtonOutcome::singular;
     hold_matrix();
-  } else if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) {
+  } else if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok && newton.evaluate(t_new, x_new = x, p) != EvalStatus::ok) {
     return NewtonOutcome::outside_domain;
   }
 

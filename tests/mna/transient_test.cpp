@@ -476,6 +476,24 @@ TEST(Start, OperatingPointThroughFunctionsThatAreInfiniteAtTheFirstGuess) {
   EXPECT_NEAR(x[unknown(m, "v(rootabs)")], std::sqrt(2.0), 1e-12);
 }
 
+TEST(Transient, SquareRootOfASourceThatTouchesZero) {
+  // v(in) = 1 + cos(w t) touches 0 at t = 5 us, where a predictor extrapolates it below 0 and
+  // sqrt(v(in)) cannot be evaluated: Newton starts from the step's start there instead.
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}).waveform = {Waveform::Shape::sine, {1, 1, 1e5, 0, 0, 90}};
+  c.add("r1", {"in", "0"}, 1e3);
+  c.add("b1", {"out", "0"}).expression = call("sqrt", {voltage("in")});
+  c.add("r2", {"out", "0"}, 1e3);
+  Model m(c, {.tstep = 1e-8, .tstop = 2e-5});
+  const Simulation run = simulate(m, 2e-5, false, 1e-6);
+  ASSERT_TRUE(run.ok) << run.failure;
+  const int out = unknown(m, "v(out)");
+  for (std::size_t k = 0; k < run.times.size(); ++k) {
+    const double exact = std::sqrt(std::max(0.0, 1 + std::cos(2 * std::numbers::pi * 1e5 * run.times[k])));
+    EXPECT_NEAR(run.states[k][out], exact, 1e-6) << "t = " << run.times[k];
+  }
+}
+
 TEST(Start, ShockleyDiodeOperatingPointSatisfiesItsEquation) {
   // 5 V through 1 k into a diode: i = IS (exp(v / (N Vt)) - 1) + GMIN v = (5 - v) / 1 k.
   CircuitSpec c;

@@ -1001,6 +1001,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     p = target;
     consistent = reinitializer.jump(t_at, x_jumped, previous, p, h_reference);
     if (!consistent && reinitializer.stalled_state() && predicate_count > 0) {
+      std::optional<Predicates> retry;
       // The new mode has no consistent state; the guards where continuation stalled say which
       // other predicates change with the ones that flipped (the diode that an ideal switch
       // closing across it turns off).
@@ -1009,29 +1010,29 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
         Predicates rescue = p;
         for (int k = 0; k < predicate_count; ++k)
           if (!flipped_here[k]) rescue[k] = guards_stalled[k] > 0;
-        if (rescue != p) {
-          p = previous;
-          target = rescue;
-          x_jumped = x_unjumped;
-          last_event.jumped = jumped_before;
-          last_event.flips.resize(flips_before);  // recorded again with the rescued mode
-          continue;
-        }
+        if (rescue != p) retry = rescue;
       }
       // No guard there says which: the mode with one more predicate flipped, each in turn. An
       // ideal switch closing across a conducting ideal diode, both without resistance or
       // forward voltage, leaves the split of the current between them undetermined; with the
       // diode off it is not, and the diode's guard (its voltage, 0) keeps it off.
-      if (!stalled_mode) stalled_mode = p, flipped_by_event = flipped_here;
-      while (next_single_flip < predicate_count && flipped_by_event[next_single_flip]) ++next_single_flip;
-      if (next_single_flip < predicate_count) {
-        target = *stalled_mode;
-        target[next_single_flip] = !target[next_single_flip];
-        ++next_single_flip;
+      if (!retry) {
+        if (!stalled_mode) stalled_mode = p, flipped_by_event = flipped_here;
+        while (next_single_flip < predicate_count && flipped_by_event[next_single_flip]) ++next_single_flip;
+        if (next_single_flip < predicate_count) {
+          retry = *stalled_mode;
+          (*retry)[next_single_flip] = !(*retry)[next_single_flip];
+          ++next_single_flip;
+          flipped_here = flipped_by_event;
+        }
+      }
+      if (retry) {
+        // The failed attempt is undone: the retry jumps from the state before it and records
+        // its own flips.
         p = previous;
+        target = *retry;
         x_jumped = x_unjumped;
         last_event.jumped = jumped_before;
-        flipped_here = flipped_by_event;
         last_event.flips.resize(flips_before);
         continue;
       }

@@ -1000,13 +1000,16 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     Predicates previous = p;
     p = target;
     consistent = reinitializer.jump(t_at, x_jumped, previous, p, h_reference);
-    if (!consistent && reinitializer.stalled_state() && predicate_count > 0) {
+    const std::optional<Vector>& failed_at =
+        reinitializer.stalled_state() ? reinitializer.stalled_state() : reinitializer.outside_domain_state();
+    if (!consistent && failed_at && predicate_count > 0) {
       std::optional<Predicates> retry;
       // The new mode has no consistent state; the guards where continuation stalled say which
       // other predicates change with the ones that flipped (the diode that an ideal switch
-      // closing across it turns off).
+      // closing across it turns off), and so do the guards where the mode left its domain (a
+      // guard at zero at the event, on its other side as the motion goes on).
       Vector guards_stalled(predicate_count);
-      if (evaluate_guards(t_at, *reinitializer.stalled_state(), guards_stalled)) {
+      if (evaluate_guards(t_at, *failed_at, guards_stalled)) {
         Predicates rescue = p;
         for (int k = 0; k < predicate_count; ++k)
           if (!flipped_here[k]) rescue[k] = guards_stalled[k] > 0;
@@ -1016,7 +1019,7 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       // ideal switch closing across a conducting ideal diode, both without resistance or
       // forward voltage, leaves the split of the current between them undetermined; with the
       // diode off it is not, and the diode's guard (its voltage, 0) keeps it off.
-      if (!retry) {
+      if (!retry && reinitializer.stalled_state()) {
         if (!stalled_mode) stalled_mode = p, flipped_by_event = flipped_here;
         while (next_single_flip < predicate_count && flipped_by_event[next_single_flip]) ++next_single_flip;
         if (next_single_flip < predicate_count) {

@@ -53,10 +53,12 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
                               ? "the circuit equations are singular in the new mode"
                               : "the model cannot be evaluated in the new mode";
         failure_unknown_ = outcome == NewtonMatrix::Outcome::singular ? newton_.singular_column() : -1;
+        if (outcome == NewtonMatrix::Outcome::outside_domain) outside_domain_state_ = x;
         return false;
       }
     } else if (!evaluate()) {
       failure_reason_ = "the model cannot be evaluated in the new mode";
+      outside_domain_state_ = x;
       return false;
     }
     ++statistics_.newton_iterations;
@@ -135,6 +137,7 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   }
   const Vector q_before = newton_.load().q;
   stalled_state_.reset();
+  outside_domain_state_.reset();
   // The impulse step is as short as the time resolution allows. Where Newton fails on it
   // (a capacitor without a DC path of its own: C/h swamps every conductance in double
   // precision, the matrix is singular or the iteration stalls at round-off) it is lengthened up
@@ -164,6 +167,7 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   if (h_impulse == 0) return std::nullopt;
   if (newton_.evaluate(t, x_plus, p_to) != EvalStatus::ok) {
     failure_reason_ = "the model cannot be evaluated after the event";
+    outside_domain_state_ = x_plus;
     return std::nullopt;
   }
   const Vector q_plus = newton_.load().q;
@@ -256,6 +260,7 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   // curvature, which bounds the first step after the restart.
   if (newton_.evaluate(t + h, x_one, p) != EvalStatus::ok) {
     failure_reason_ = "the model cannot be evaluated after the event";
+    outside_domain_state_ = x_one;
     return std::nullopt;
   }
   state.q_second_derivative = (-newton_.load().f - state.q_derivative) / h;
@@ -267,6 +272,7 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
 bool Reinitializer::derivatives_at(double t, const Predicates& p, ConsistentState& state) {
   if (newton_.evaluate(t, state.x, p) != EvalStatus::ok) {
     failure_reason_ = "the model cannot be evaluated after the event";
+    outside_domain_state_ = state.x;
     return false;
   }
   state.q = newton_.load().q;

@@ -56,6 +56,10 @@ class Reinitializer {
   // new mode (a mode without a solution, like an ideal switch closing onto a conducting ideal
   // diode, shows there which other predicates must change with it).
   const std::optional<Vector>& stalled_state() const { return stalled_state_; }
+  // After a failed jump: the state where the new mode could not be evaluated (outside its
+  // domain), if that is why it failed. A guard at zero at the event may be on its other side
+  // there, as the motion goes on (abs() of a sine starting at 0, under a sqrt).
+  const std::optional<Vector>& outside_domain_state() const { return outside_domain_state_; }
 
  private:
   // Backward Euler of length h from charges q_start, for the blend of modes
@@ -79,6 +83,7 @@ class Reinitializer {
   std::string failure_reason_;
   int failure_unknown_ = -1;
   std::optional<Vector> stalled_state_;
+  std::optional<Vector> outside_domain_state_;
 };
 
 }  // namespace padae

@@ -494,6 +494,23 @@ TEST(Transient, SquareRootOfASourceThatTouchesZero) {
   }
 }
 
+TEST(Transient, SquareRootOfAbsOfARampFromZero) {
+  // abs(v(in)) starts at its kink: v(in) = 0, its predicate off (-v(in)), and just after t = 0
+  // sqrt(-v(in)) cannot be evaluated. The guards where the mode left its domain (v(in) > 0)
+  // name the mode to take instead: v(out) = sqrt(t / 1 ms).
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}).waveform = {Waveform::Shape::piecewise_linear, {0, 0, 1e-3, 1}};
+  c.add("b1", {"out", "0"}).expression = call("sqrt", {call("abs", {voltage("in")})});
+  c.add("r1", {"out", "0"}, 1e3);
+  Model m(c, {.tstep = 1e-5, .tstop = 1e-3});
+  const Simulation run = simulate(m, 1e-3, false, 1e-6);
+  ASSERT_TRUE(run.ok) << run.failure;
+  const int out = unknown(m, "v(out)");
+  for (std::size_t k = 0; k < run.times.size(); ++k)
+    EXPECT_NEAR(run.states[k][out], std::sqrt(run.times[k] / 1e-3), 1e-5) << "t = " << run.times[k];
+  EXPECT_NEAR(run.times.back(), 1e-3, 1e-15);
+}
+
 TEST(Start, ShockleyDiodeOperatingPointSatisfiesItsEquation) {
   // 5 V through 1 k into a diode: i = IS (exp(v / (N Vt)) - 1) + GMIN v = (5 - v) / 1 k.
   CircuitSpec c;

@@ -246,7 +246,9 @@ int BehavioralExpression::compile(const netlist::Expression& e, const Unknowns& 
   return fail("unknown function '" + f + "'");
 }
 
-void BehavioralExpression::forward(double t, const Vector& x, const std::uint8_t* p, double* guard_out) const {
+void BehavioralExpression::forward(double t, const Vector& x, const std::uint8_t* p, double* guard_out,
+                                   bool continued) const {
+  past_a_guard_ = false;
   for (std::size_t k = 0; k < tape_.size(); ++k) {
     const Instruction& in = tape_[k];
     const double a = in.a >= 0 ? values_[in.a] : 0, b = in.b >= 0 ? values_[in.b] : 0;
@@ -273,6 +275,7 @@ void BehavioralExpression::forward(double t, const Vector& x, const std::uint8_t
       case Op::greater:
         if (p) {
           value = p[in.index];
+          if ((a - b > 0) != (value != 0)) past_a_guard_ = true;
         } else {
           guard_out[in.index] = a - b;
           value = a - b > 0;
@@ -290,7 +293,13 @@ void BehavioralExpression::forward(double t, const Vector& x, const std::uint8_t
       // ngspice's -1e99 there.
       case Op::log: value = a != 0 ? std::log(a) : kLogOfZero, d[0] = a != 0 ? 1 / a : 0; break;
       case Op::log10: value = a != 0 ? std::log10(a) : kLogOfZero, d[0] = a != 0 ? 1 / (a * std::log(10.0)) : 0; break;
-      case Op::sqrt: value = std::sqrt(a), d[0] = a != 0 ? 0.5 / value : 0; break;
+      case Op::sqrt:
+        if (continued && a < 0) {
+          value = -std::sqrt(-a), d[0] = -0.5 / value;
+          break;
+        }
+        value = std::sqrt(a), d[0] = a != 0 ? 0.5 / value : 0;
+        break;
       case Op::sin: value = std::sin(a), d[0] = std::cos(a); break;
       case Op::cos: value = std::cos(a), d[0] = -std::sin(a); break;
       case Op::tan: value = std::tan(a), d[0] = 1 + value * value; break;
@@ -314,6 +323,11 @@ void BehavioralExpression::forward(double t, const Vector& x, const std::uint8_t
 
 double BehavioralExpression::evaluate(double t, const Vector& x, const std::uint8_t* p, double* gradient) const {
   forward(t, x, p, nullptr);
+  // Past a crossed guard a mode is only ever used to locate the crossing (the event then takes
+  // the other branch): there it is continued across sqrt's domain edge, so that the crossing
+  // can be located where the mode's own branch reaches that edge with its guard (sqrt(abs(v))
+  // of a sine: the branch v of abs reaches v < 0 as the guard v > 0 crosses).
+  if (p && past_a_guard_ && !std::isfinite(values_.back())) forward(t, x, p, nullptr, true);
   const double result = values_.back();
   if (!gradient) return result;
   std::fill(gradient, gradient + inputs_.size(), 0.0);

@@ -9,7 +9,9 @@
 // are evaluated (their guards exist whatever the predicate), but only the live one counts.
 // floor and ceil are piecewise constant with unbounded jump count: no predicate, zero slope.
 // `^`, `**` and pow(x, y) follow ngspice 39: |x|^y, also for a whole y ((-2)^3 = 8); pwr(x, y)
-// is sgn(x) |x|^y.
+// is sgn(x) |x|^y. In a mode past one of its crossed guards (used only to locate the crossing)
+// sqrt is continued below 0 as -sqrt(-x): abs's live branch reaches sqrt's domain edge together
+// with its guard.
 #pragma once
 
 #include <array>
@@ -62,8 +64,10 @@ class BehavioralExpression {
   int greater(int a, int b, std::string label);
   int input(int unknown);
   // Forward sweep: values and local partials. With p null, conditions follow their guards
-  // (written to guard_out).
-  void forward(double t, const Vector& x, const std::uint8_t* p, double* guard_out) const;
+  // (written to guard_out). With p, whether a guard is past its crossing (on the other side of
+  // its predicate) goes to past_a_guard_; with continued, sqrt is continued below 0 as
+  // -sqrt(-x).
+  void forward(double t, const Vector& x, const std::uint8_t* p, double* guard_out, bool continued = false) const;
   bool find_constant_gradient() const;
 
   std::string element_;
@@ -71,6 +75,7 @@ class BehavioralExpression {
   std::vector<int> inputs_;
   std::vector<std::string> predicate_labels_;
   bool constant_gradient_ = false;
+  mutable bool past_a_guard_ = false;
   mutable std::vector<double> values_, adjoints_;
   mutable std::vector<std::array<double, 3>> partials_;
 };

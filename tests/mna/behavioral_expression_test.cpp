@@ -137,6 +137,30 @@ TEST(BehavioralExpression, DeadBranchNeverPoisonsTheGradient) {
   EXPECT_EQ(gradient[0], 0);
 }
 
+// A mode past its crossed guard only locates the crossing: there sqrt is continued below 0
+// (-sqrt(-x)), so that abs's branch reaching the domain edge with its guard stays evaluable.
+// Nowhere else: a negative argument without a crossed guard is outside the domain.
+TEST(BehavioralExpression, SqrtIsContinuedBelowZeroOnlyPastACrossedGuard) {
+  Fixture fx;
+  Vector x(2);
+  x << -0.25, 1;
+  double gradient[2];
+  BehavioralExpression root_of_abs(*call("sqrt", {call("abs", {voltage("a")})}), fx.unknowns, "b1");
+  const std::uint8_t positive_branch = 1, negative_branch = 0;
+  EXPECT_DOUBLE_EQ(root_of_abs.evaluate(0, x, &positive_branch, gradient), -0.5);  // guard a > 0 crossed
+  EXPECT_DOUBLE_EQ(gradient[0], 1);
+  EXPECT_DOUBLE_EQ(root_of_abs.evaluate(0, x, &negative_branch, gradient), 0.5);  // the live mode
+  EXPECT_DOUBLE_EQ(gradient[0], -1);
+  BehavioralExpression root(*call("sqrt", {voltage("a")}), fx.unknowns, "b1");
+  EXPECT_FALSE(std::isfinite(root.evaluate(0, x, nullptr, gradient)));
+  BehavioralExpression root_and_condition(
+      *binary(BinaryOperator::add, call("sqrt", {voltage("a")}),
+              conditional(binary(BinaryOperator::greater, voltage("b"), number(0)), number(1), number(0))),
+      fx.unknowns, "b1");
+  const std::uint8_t b_positive = 1;  // its guard, b = 1, not crossed
+  EXPECT_FALSE(std::isfinite(root_and_condition.evaluate(0, x, &b_positive, gradient)));
+}
+
 TEST(BehavioralExpression, EqualityUsesTwoPredicates) {
   Fixture fx;
   BehavioralExpression e(*conditional(binary(BinaryOperator::equal, voltage("a"), voltage("b")), number(1), number(0)), fx.unknowns, "b1");

@@ -511,6 +511,27 @@ TEST(Transient, SquareRootOfAbsOfARampFromZero) {
   EXPECT_NEAR(run.times.back(), 1e-3, 1e-15);
 }
 
+TEST(Transient, SquareRootOfAbsOfASineCrossesItsZeros) {
+  // sqrt(abs(sin(w t))): at each zero of the sine abs's live branch reaches sqrt's domain edge
+  // together with its guard; the crossings are located as events (5 in 3 ms) and each half
+  // period follows its own branch.
+  CircuitSpec c;
+  c.add("v1", {"in", "0"}).waveform = {Waveform::Shape::sine, {0, 1, 1e3}};
+  c.add("b1", {"out", "0"}).expression = call("sqrt", {call("abs", {voltage("in")})});
+  c.add("r1", {"out", "0"}, 1e3);
+  Model m(c, {.tstep = 1e-5, .tstop = 3e-3});
+  const Simulation run = simulate(m, 3e-3, false, 1e-6);
+  ASSERT_TRUE(run.ok) << run.failure;
+  EXPECT_NEAR(run.times.back(), 3e-3, 1e-15);
+  ASSERT_EQ(run.events.size(), 5u);
+  for (std::size_t k = 0; k < run.events.size(); ++k) EXPECT_NEAR(run.events[k].t, 0.5e-3 * (k + 1), 1e-12);
+  const int out = unknown(m, "v(out)");
+  for (std::size_t k = 0; k < run.times.size(); ++k) {
+    const double exact = std::sqrt(std::abs(std::sin(2 * std::numbers::pi * 1e3 * run.times[k])));
+    EXPECT_NEAR(run.states[k][out], exact, 2e-5) << "t = " << run.times[k];
+  }
+}
+
 TEST(Start, ShockleyDiodeOperatingPointSatisfiesItsEquation) {
   // 5 V through 1 k into a diode: i = IS (exp(v / (N Vt)) - 1) + GMIN v = (5 - v) / 1 k.
   CircuitSpec c;

@@ -49,16 +49,16 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     if (refactor) {
       auto outcome = factor();
       if (outcome != NewtonMatrix::Outcome::ok) {
-        failure_reason_ = outcome == NewtonMatrix::Outcome::singular
-                              ? "the circuit equations are singular in the new mode"
-                              : "the model cannot be evaluated in the new mode";
-        failure_unknown_ = outcome == NewtonMatrix::Outcome::singular ? newton_.singular_column() : -1;
-        if (outcome == NewtonMatrix::Outcome::outside_domain) outside_domain_state_ = x;
+        if (outcome == NewtonMatrix::Outcome::outside_domain) {
+          outside_domain_at(t_eval, x, {&p_to, &p_from}, "the model cannot be evaluated in the new mode");
+          return false;
+        }
+        failure_reason_ = "the circuit equations are singular in the new mode";
+        failure_unknown_ = newton_.singular_column();
         return false;
       }
     } else if (!evaluate()) {
-      failure_reason_ = "the model cannot be evaluated in the new mode";
-      outside_domain_state_ = x;
+      outside_domain_at(t_eval, x, {&p_to, &p_from}, "the model cannot be evaluated in the new mode");
       return false;
     }
     ++statistics_.newton_iterations;
@@ -131,12 +131,14 @@ bool Reinitializer::backward_euler_with_continuation(double t_eval, double h,
 std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_start,
                                                    const Predicates& p_from,
                                                    const Predicates& p_to, double h_reference) {
+  stalled_state_.reset();
+  failure_unknown_ = -1;
   if (newton_.evaluate(t, x_start, p_from) != EvalStatus::ok) {
-    failure_reason_ = "the model cannot be evaluated at the event";
+    outside_domain_at(t, x_start, {&p_from}, "the model cannot be evaluated at the event");
+    outside_domain_state_.reset();  // the state before the event: it names no other mode
     return std::nullopt;
   }
   const Vector q_before = newton_.load().q;
-  stalled_state_.reset();
   outside_domain_state_.reset();
   // The impulse step is as short as the time resolution allows. Where Newton fails on it
   // (a capacitor without a DC path of its own: C/h swamps every conductance in double
@@ -166,8 +168,7 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   }
   if (h_impulse == 0) return std::nullopt;
   if (newton_.evaluate(t, x_plus, p_to) != EvalStatus::ok) {
-    failure_reason_ = "the model cannot be evaluated after the event";
-    outside_domain_state_ = x_plus;
+    outside_domain_at(t, x_plus, {&p_to}, "the model cannot be evaluated after the event");
     return std::nullopt;
   }
   const Vector q_plus = newton_.load().q;
@@ -259,8 +260,7 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   // The first settling step's -f is q' at t + h: a fast mode the new motion starts shows as
   // curvature, which bounds the first step after the restart.
   if (newton_.evaluate(t + h, x_one, p) != EvalStatus::ok) {
-    failure_reason_ = "the model cannot be evaluated after the event";
-    outside_domain_state_ = x_one;
+    outside_domain_at(t + h, x_one, {&p}, "the model cannot be evaluated after the event");
     return std::nullopt;
   }
   state.q_second_derivative = (-newton_.load().f - state.q_derivative) / h;
@@ -268,11 +268,26 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   return state;
 }
 
+void Reinitializer::outside_domain_at(double t, const Vector& x, std::initializer_list<const Predicates*> modes,
+                                      const char* reason) {
+  failure_reason_ = reason;
+  outside_domain_state_ = x;
+  // The first equation a mode cannot evaluate at x names its element.
+  for (const Predicates* p : modes) {
+    if (newton_.evaluate(t, x, *p) == EvalStatus::ok) continue;
+    const Load& load = newton_.load();
+    for (Eigen::Index i = 0; i < load.f.size(); ++i)
+      if (!std::isfinite(load.f[i]) || !std::isfinite(load.q[i])) {
+        failure_unknown_ = static_cast<int>(i);
+        return;
+      }
+  }
+}
+
 // q and its right derivative -f (dynamic rows) at the consistent state.x.
 bool Reinitializer::derivatives_at(double t, const Predicates& p, ConsistentState& state) {
   if (newton_.evaluate(t, state.x, p) != EvalStatus::ok) {
-    failure_reason_ = "the model cannot be evaluated after the event";
-    outside_domain_state_ = state.x;
+    outside_domain_at(t, state.x, {&p}, "the model cannot be evaluated after the event");
     return false;
   }
   state.q = newton_.load().q;

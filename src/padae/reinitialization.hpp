@@ -19,6 +19,7 @@
 // residuals of the old and the new mode.
 #pragma once
 
+#include <initializer_list>
 #include <optional>
 #include <string>
 
@@ -74,6 +75,10 @@ class Reinitializer {
   std::optional<ConsistentState> settle(double t, const Vector& x_plus, const Vector& q_plus,
                                         const Predicates& p, double h);
   bool derivatives_at(double t, const Predicates& p, ConsistentState& state);
+  // A failure because the model cannot be evaluated at (t, x): the reason, x, and the unknown
+  // whose equation is not finite there in the first of the modes that cannot evaluate it.
+  void outside_domain_at(double t, const Vector& x, std::initializer_list<const Predicates*> modes,
+                         const char* reason);
 
   System& system_;
   NewtonMatrix& newton_;

@@ -871,6 +871,21 @@ def case_newton_divergence(c):
     c.stats_figure(r)
 
 
+def case_sqrt_argument_jumps_negative(c):
+    r = c.run(tag="default")
+    c.expect(r.returncode == 1, f"exit 1 ({describe_status(r.returncode)})")
+    tf = r.failure_time()
+    c.expect(tf is not None and abs(tf - 0.5e-3) <= 1e-9, f"stopped at t = {g(tf)} s (the step at 0.5 ms, within 1 ns)", key=True)
+    c.expect("element b1" in r.stderr, "the diagnostic names b1", key=True)
+    c.figure("diagnostic: " + r.error_text())
+    c.expect(len(r.rows) >= 10 and r.rows[-1][0] >= 0.45e-3,
+             f"rows kept: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s")
+    if r.rows:
+        err, at = max_error(r, "v(out)", lambda t: 1.0)
+        c.expect(err <= 1e-9, f"the rows kept are v(out) = 1 V to {g(err)} V (at {g(at)} s)")
+    c.stats_figure(r)
+
+
 def relaxation_cap(t, rc=1e-3):
     """v(cap) of circuits/relaxation_oscillator.cir from 3 V: down towards -5 V until -2.5 V
     (t1 = RC ln 3.2), then between +-2.5 V towards +-5 V, each half period RC ln 3."""
@@ -1096,6 +1111,7 @@ NUMERIC_CASES = [
     ("events", "pwl_repeat_square_rc", case_pwl_repeat_square_rc),
     ("faults", "log_negative_off_path", case_log_negative_off_path),
     ("faults", "newton_divergence", case_newton_divergence),
+    ("faults", "sqrt_argument_jumps_negative", case_sqrt_argument_jumps_negative),
     ("faults", "tolerance_below_roundoff", case_tolerance_below_roundoff),
     ("faults", "tolerance_below_roundoff_junctions", case_tolerance_below_roundoff_junctions),
     ("faults", "tolerance_below_roundoff_operating_point", case_tolerance_below_roundoff_operating_point),

@@ -202,7 +202,11 @@ double Reinitializer::settle_step(double t, double h_reference) const {
 // hidden algebraic directions of floating capacitors) consistent, accurate to O(h^3), while the
 // steps stay well conditioned. A mode faster than the steps (a switch's RC of a nanosecond
 // against microsecond steps) is not polynomial over them: the difference between the quadratic
-// and the linear extrapolation shows it, and h is shortened until it is resolved.
+// and the linear extrapolation shows it, and h is shortened until it is resolved. A mode so fast
+// that all three steps see it settled (a picosecond RC against steps of 10 us) shows instead as
+// extrapolated charges off the ones the steps start from; where even the shortest steps settle
+// it, the state at t + 0 is the vanishing step's (its charges are exact: nothing but the fast
+// mode's own motion moves them).
 std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_plus,
                                                      const Vector& q_plus, const Predicates& p,
                                                      double h) {
@@ -212,11 +216,20 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   Vector differential_weight = inverse_weight;
   for (int i = 0; i < system_.size(); ++i)
     if (system_.kind(i) != UnknownKind::differential) differential_weight[i] = 0;
+  Vector charge_tolerance;
+  newton_.charge_scale(options_.rtol * x_plus.cwiseAbs() + absolute_tolerance_, charge_tolerance);
+  const Vector inverse_charge_weight =
+      charge_tolerance.unaryExpr([](double w) { return w > 0 ? 1 / w : 0.0; });
+  // Whether the extrapolation reproduces the charges the steps start from.
+  auto keeps_charges = [&](const Vector& x_at) {
+    return newton_.evaluate(t, x_at, p) == EvalStatus::ok &&
+           weighted_max_norm(newton_.load().q - q_plus, inverse_charge_weight) <= kSettleAccuracy;
+  };
   Vector x_one, x_two, x_four, extrapolated;
   // Shorter steps also where Newton fails: the motion over a long step may be far from x_plus.
   // Where the shorter steps fail (round-off of an ill-conditioned matrix), the last
   // extrapolation stands.
-  bool have_extrapolation = false;
+  bool have_extrapolation = false, charges_kept = false;
   for (;; h *= 1e-3) {
     Vector one = x_plus;
     bool solved = backward_euler_with_continuation(t + h, h, q_plus, p, p, one);
@@ -237,16 +250,18 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
     extrapolated = (8 * x_one - 6 * x_two + x_four) / 3;
     have_extrapolation = true;
     const Vector curvature = (2 * x_one - 3 * x_two + x_four) / 3;
-    if (weighted_max_norm(curvature, inverse_weight) <= kSettleAccuracy || h * 1e-3 < h_shortest) break;
     // Curvature that the rounding of the three solutions explains is noise, which shorter steps
     // only amplify. Their rounding, estimated on the last factorization (the 4h step's), is at
     // most 4 and 2 times as large for the h and 2h steps (C/h per ulp), so at most 5 times in
     // the curvature.
-    if (newton_.within_roundoff(curvature, kSettleAccuracy, inverse_weight, 5, x_four, q_plus / (4 * h))) break;
+    const bool resolved = weighted_max_norm(curvature, inverse_weight) <= kSettleAccuracy ||
+                          newton_.within_roundoff(curvature, kSettleAccuracy, inverse_weight, 5, x_four, q_plus / (4 * h));
+    charges_kept = keeps_charges(extrapolated);
+    if ((resolved && charges_kept) || h * 1e-3 < h_shortest) break;
   }
   ConsistentState state;
   state.x_impulse = x_plus;
-  state.x = extrapolated;
+  state.x = charges_kept ? extrapolated : x_plus;
   // The vanishing step's differential unknowns are exact where it was well conditioned, and
   // the extrapolation agrees with them to Newton's tolerance; where they differ by more than a
   // tenth of the error tolerance the vanishing step lost the hidden algebraic directions.

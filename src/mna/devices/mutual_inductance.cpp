@@ -10,6 +10,8 @@ class MutualInductance final : public Device {
  public:
   explicit MutualInductance(const ElementSpec& spec) : Device(spec), coupling_(spec.value) {
     if (spec.controls.size() != 2) throw ModelError("coupling '" + spec.name + "' needs two inductors");
+    if (spec.controls[0] == spec.controls[1])
+      throw ModelError("coupling '" + spec.name + "' couples '" + spec.controls[0] + "' with itself: it needs two different inductors");
     if (!(std::abs(coupling_) <= 1)) throw ModelError("coupling '" + spec.name + "': |k| must not exceed 1");
   }
   void declare(Stamper& s) override {

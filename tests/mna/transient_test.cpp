@@ -368,14 +368,20 @@ TEST(Start, HeldInitialVoltageThenRelaxes) {
 namespace mna::test {
 namespace {
 
+// A 1 V divider: R1 = 1 ohm from the source, below it S1 (VT 1, VH 0.5, RON 1, ROFF 1 Meg)
+// controlled by v(ctl).
+void switched_divider(CircuitSpec& c) {
+  c.add("v1", {"in", "0"}, 1.0);
+  c.add("r1", {"in", "out"}, 1.0);
+  c.add("s1", {"out", "0", "ctl", "0"}).model = {{"vt", 1.0}, {"vh", 0.5}, {"ron", 1.0}, {"roff", 1e6}};
+}
+
 TEST(Events, SwitchHysteresisThresholdsAreHitExactly) {
   // Control ramps 0 -> 2 V over 1 ms and back: on above VT + VH = 1.5 V (t = 0.75 ms), off
   // below VT - VH = 0.5 V (t = 1.75 ms). The switch (RON 1, ROFF 1 Meg) loads a 1 V divider.
   CircuitSpec c;
   c.add("vctl", {"ctl", "0"}).waveform = {Waveform::Shape::piecewise_linear, {0, 0, 1e-3, 2, 2e-3, 0}};
-  c.add("v1", {"in", "0"}, 1.0);
-  c.add("r1", {"in", "out"}, 1.0);
-  c.add("s1", {"out", "0", "ctl", "0"}).model = {{"vt", 1.0}, {"vh", 0.5}, {"ron", 1.0}, {"roff", 1e6}};
+  switched_divider(c);
   Model m(c, {.tstep = 1e-5, .tstop = 2e-3});
   const Simulation run = simulate(m, 2e-3, false);
   ASSERT_TRUE(run.ok) << run.failure;
@@ -395,9 +401,7 @@ TEST(Events, SwitchControlRestingAtAThresholdKeepsTheState) {
   // on).
   CircuitSpec c;
   c.add("vctl", {"ctl", "0"}).waveform = {Waveform::Shape::piecewise_linear, {0, 0, 1e-3, 0.5, 2e-3, 0.5, 3e-3, 2, 4e-3, 0.5}};
-  c.add("v1", {"in", "0"}, 1.0);
-  c.add("r1", {"in", "out"}, 1.0);
-  c.add("s1", {"out", "0", "ctl", "0"}).model = {{"vt", 1.0}, {"vh", 0.5}, {"ron", 1.0}, {"roff", 1e6}};
+  switched_divider(c);
   Model m(c, {.tstep = 1e-5, .tstop = 6e-3});
   const Simulation run = simulate(m, 6e-3, false);
   ASSERT_TRUE(run.ok) << run.failure;

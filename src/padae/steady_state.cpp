@@ -79,6 +79,32 @@ class SteadyStateSolver {
     return false;
   }
 
+  // The predicate whose guard most contradicts mode p at x; -1 if none does (or the guards
+  // cannot be evaluated there).
+  int most_contradicted(const Vector& x, const Predicates& p) {
+    Vector values(system_.predicate_count());
+    values.setZero();
+    if (system_.guards(t_, x, values) != EvalStatus::ok) return -1;
+    int worst = -1;
+    for (int k = 0; k < system_.predicate_count(); ++k)
+      if ((values[k] > 0) != static_cast<bool>(p[k]) && (worst < 0 || std::abs(values[k]) > std::abs(values[worst])))
+        worst = k;
+    return worst;
+  }
+
+  // The same at the relaxed steady state from x, where mode p has none: which way the state
+  // goes. The relaxation's shift is a conductance to ground at each node and a resistance in
+  // series with each branch whose current is an unknown; the smallest that converges opens a
+  // cut-set of current sources and breaks a loop of voltage sources, and leaves the rest to the
+  // circuit's own elements.
+  int most_contradicted_relaxed(const Vector& x, const Predicates& p) {
+    for (double shift = 1e-9; shift <= 1e6; shift *= 1e3) {
+      Vector relaxed = x;
+      if (newton(relaxed, x, p, shift)) return most_contradicted(relaxed, p);
+    }
+    return -1;
+  }
+
   bool guards(const Vector& x, Predicates& p) {
     Vector values(system_.predicate_count());
     values.setZero();
@@ -127,7 +153,26 @@ SteadyState steady_state(System& system, double t, const Vector& x_guess, const 
       return result;
     }
   }
-  // Iterate the modes to a fixed point: solve with p, re-evaluate the predicates, repeat.
+  // Iterate the modes to a fixed point: solve with p, re-evaluate the predicates, flip every one
+  // that disagrees, repeat. Where a mode so reached has no steady state (ideal diodes in a
+  // bridge: all off, a current source has no path; all on, they short the source), the search
+  // goes back to the last mode solved and from then on flips one predicate at a time, the one
+  // its guard contradicts most, as a complementarity problem is pivoted.
+  struct SolvedMode {
+    Vector x;
+    Predicates p;
+  };
+  std::optional<SolvedMode> solved;
+  bool one_at_a_time = false;
+  auto flip = [&](const Predicates& next) {
+    solver.jump(result.x, result.p, next);
+    result.p = next;
+  };
+  auto flip_one = [&](int k) {
+    Predicates next = result.p;
+    next[k] = !next[k];
+    flip(next);
+  };
   for (int iteration = 0; iteration < options.max_event_iterations; ++iteration) {
     Vector x = result.x;
     if (!solver.newton(x, x, result.p, 0.0)) {
@@ -137,13 +182,26 @@ SteadyState steady_state(System& system, double t, const Vector& x_guess, const 
         Predicates there = result.p;
         if (solver.guards(*left, there) && there != result.p) {
           result.x = *left;
-          solver.jump(result.x, result.p, there);
-          result.p = there;
+          flip(there);
           continue;
         }
       }
       x = result.x;
       if (!solver.pseudo_transient(x, result.p)) {
+        if (solved && !one_at_a_time) {
+          one_at_a_time = true;
+          result.x = solved->x;
+          result.p = solved->p;
+          if (const int k = solver.most_contradicted(result.x, result.p); k >= 0) {
+            flip_one(k);
+            continue;
+          }
+        }
+        if (const int k = solver.most_contradicted_relaxed(result.x, result.p); k >= 0) {
+          one_at_a_time = true;
+          flip_one(k);
+          continue;
+        }
         result.message = "no steady state: Newton's method and pseudo-transient continuation fail";
         result.worst_unknown = solver.worst();
         return result;
@@ -163,8 +221,10 @@ SteadyState steady_state(System& system, double t, const Vector& x_guess, const 
       result.converged = true;
       return result;
     }
-    solver.jump(result.x, result.p, next);
-    result.p = next;
+    solved = SolvedMode{result.x, result.p};
+    const int k = one_at_a_time ? solver.most_contradicted(result.x, result.p) : -1;
+    if (k >= 0) flip_one(k);
+    else flip(next);
   }
   result.message =
       "the predicates do not settle at a steady state (they keep flipping: an oscillator has none; start it from "

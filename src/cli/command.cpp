@@ -424,7 +424,11 @@ class Session {
                             blame(*model_, unknown), diagnosis.empty() ? "" : ": " + diagnosis));
     return simulation_failure;
   }
-  int fail(const padae::Failure& failure) { return fail(failure.t, failure.reason, failure.unknown, failure.diagnosis); }
+  // A run that stops at an event may have reached a mode the circuit's graph rules out: named.
+  int fail(const padae::Failure& failure) {
+    const std::string fault = failure.diagnosis.empty() ? mna::mode_structure_fault(*model_, integrator_->predicates()) : "";
+    return fail(failure.t, failure.reason, failure.unknown, fault.empty() ? failure.diagnosis : "in the modes it stopped in: " + fault);
+  }
   void emit(double t, const mna::Vector& x) {
     if (t >= tstart_) waveforms_.row(t, x);
   }

@@ -128,6 +128,15 @@ void check_mode_structure(const Model& model, StartKind start, const padae::Pred
   check_edges(model, start, model.edges(mode), "with the initial switch and diode states: ");
 }
 
+std::string mode_structure_fault(const Model& model, const padae::Predicates& mode) {
+  try {
+    check_edges(model, StartKind::initial_conditions, model.edges(mode), "");
+  } catch (const ModelError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 namespace {
 
 // The start's Newton matrix, dense: df/dx (operating point) or df/dx + c dq/dx (uic).

@@ -26,6 +26,11 @@ void check_structure(const Model& model, StartKind start);
 // they close or a node they isolate is reported before the run.
 void check_mode_structure(const Model& model, StartKind start, const padae::Predicates& mode);
 
+// The same checks in a mode the run reached (capacitors conduct, inductors do not): what they
+// find, or empty. A mode without a consistent state after an event may be singular so (a current
+// source in series with an ideal switch that opened, sources in a loop an ideal switch closed).
+std::string mode_structure_fault(const Model& model, const padae::Predicates& mode);
+
 // After a start failed: when the start's equations are linear in the given mode (the Newton
 // matrix, df/dx for the operating point or df/dx + dq/dx / time_scale for uic, is the same at two
 // points) and that matrix is singular (full-pivoting LU after row and column equilibration),

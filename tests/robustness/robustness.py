@@ -886,6 +886,30 @@ def case_sqrt_argument_jumps_negative(c):
     c.stats_figure(r)
 
 
+def expect_stops_at_gate_edge(c, r, names, probe, value):
+    """A run whose switches reach, at the gate edge (1 us + 0.5 ns), a mode in which no state
+    exists: exit 1 there, the fault named, the rows before kept and at their closed form."""
+    c.expect(r.returncode == 1, f"exit 1 ({describe_status(r.returncode)})")
+    tf = r.failure_time()
+    c.expect(tf is not None and abs(tf - 1.0005e-6) <= 1e-12, f"stopped at t = {g(tf)} s (the gate edge, within 1 ps)", key=True)
+    c.expect(all(name in r.stderr for name in names), "the diagnostic names " + ", ".join(names), key=True)
+    c.figure("diagnostic: " + r.error_text())
+    c.expect(len(r.rows) >= 10 and r.rows[-1][0] >= 0.99e-6,
+             f"rows kept: {len(r.rows)}, the last at {g(r.rows[-1][0] if r.rows else None)} s")
+    if r.rows:
+        err, at = max_error(r, probe, lambda t: value)
+        c.expect(err <= 1e-9, f"the rows kept are {probe} = {g(value)} V to {g(err)} V (at {g(at)} s)")
+    c.stats_figure(r)
+
+
+def case_current_source_switch_opens(c):
+    expect_stops_at_gate_edge(c, c.run(tag="default"), ["cut-set of current sources", "node(s) a", "i1"], "v(b)", 1.0)
+
+
+def case_switches_close_source_loop(c):
+    expect_stops_at_gate_edge(c, c.run(tag="default"), ["loop of voltage sources", "v1", "v2", "s1", "s2"], "v(c)", 0.0)
+
+
 def relaxation_cap(t, rc=1e-3):
     """v(cap) of circuits/relaxation_oscillator.cir from 3 V: down towards -5 V until -2.5 V
     (t1 = RC ln 3.2), then between +-2.5 V towards +-5 V, each half period RC ln 3."""
@@ -1112,6 +1136,8 @@ NUMERIC_CASES = [
     ("faults", "log_negative_off_path", case_log_negative_off_path),
     ("faults", "newton_divergence", case_newton_divergence),
     ("faults", "sqrt_argument_jumps_negative", case_sqrt_argument_jumps_negative),
+    ("faults", "current_source_switch_opens", case_current_source_switch_opens),
+    ("faults", "switches_close_source_loop", case_switches_close_source_loop),
     ("faults", "tolerance_below_roundoff", case_tolerance_below_roundoff),
     ("faults", "tolerance_below_roundoff_junctions", case_tolerance_below_roundoff_junctions),
     ("faults", "tolerance_below_roundoff_operating_point", case_tolerance_below_roundoff_operating_point),

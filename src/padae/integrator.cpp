@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 #include <optional>
@@ -211,6 +212,8 @@ struct Integrator::Impl {
                                  const Vector& guards_right);
   bool settle(double t_at, const Vector& x_start, const Predicates& target,
               bool record_flips);
+  Predicates undetermined_flipped(double t_at, const Vector& x_at, const Predicates& mode, double cj,
+                                  const std::vector<char>& kept);
   void restart(double t_at, const ConsistentState& consistent);
 
   StepOutcome fail(double t_at, std::string reason, int unknown = -1, std::string diagnosis = {}) {
@@ -1015,14 +1018,21 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
           if (!flipped_here[k]) rescue[k] = guards_stalled[k] > 0;
         if (rescue != p) retry = rescue;
       }
-      // No guard there says which: the mode with one more predicate flipped, each in turn. An
-      // ideal switch closing across a conducting ideal diode, both without resistance or
-      // forward voltage, leaves the split of the current between them undetermined; with the
-      // diode off it is not, and the diode's guard (its voltage, 0) keeps it off.
+      // No guard there says which. An ideal switch closing across a conducting ideal diode,
+      // both without resistance or forward voltage, leaves the split of the current between them
+      // undetermined; with the diode off it is not, and the diode's guard (its voltage, 0) keeps
+      // it off. So first the predicates whose guards move along what the mode leaves undetermined
+      // flip, one per undetermined direction (the two legs of a full bridge); then the modes with
+      // one more predicate flipped, each in turn.
       if (!retry && reinitializer.stalled_state()) {
-        if (!stalled_mode) stalled_mode = p, flipped_by_event = flipped_here;
-        while (next_single_flip < predicate_count && flipped_by_event[next_single_flip]) ++next_single_flip;
-        if (next_single_flip < predicate_count) {
+        if (!stalled_mode) {
+          stalled_mode = p, flipped_by_event = flipped_here;
+          const Predicates undetermined =
+              undetermined_flipped(t_at, *reinitializer.stalled_state(), p, 1 / h_reference, flipped_by_event);
+          if (undetermined != p) retry = undetermined;
+        }
+        while (!retry && next_single_flip < predicate_count && flipped_by_event[next_single_flip]) ++next_single_flip;
+        if (!retry && next_single_flip < predicate_count) {
           retry = *stalled_mode;
           (*retry)[next_single_flip] = !(*retry)[next_single_flip];
           ++next_single_flip;
@@ -1089,6 +1099,44 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
   if (last_event.jumped) ++statistics.jumps;
   restart(t_at, *consistent);
   return true;
+}
+
+// The mode with as few predicates flipped (none of those in `kept`) as make the mode's equations
+// at x regular: while they are singular (the current around a loop of ideal elements left
+// undetermined), the predicate whose guard moves most along the undetermined direction flips.
+// Inverse iteration on the matrix shifted by far less than any conductance finds that direction:
+// it grows by the inverse shift, every other by far less.
+Predicates Integrator::Impl::undetermined_flipped(double t_at, const Vector& x_at, const Predicates& mode,
+                                                  double cj, const std::vector<char>& kept) {
+  constexpr double kShift = 1e-12;
+  Predicates flipped = mode;
+  std::vector<char> fixed = kept;
+  Vector guards_at(predicate_count), guards_moved(predicate_count), direction(n);
+  if (!evaluate_guards(t_at, x_at, guards_at)) return mode;
+  while (newton.factor(t_at, x_at, flipped, cj) == NewtonMatrix::Outcome::singular) {
+    if (newton.factor_shifted(t_at, x_at, flipped, kShift, cj) != NewtonMatrix::Outcome::ok) return mode;
+    // Signs and sizes from the bits of a multiplicative hash: a start with a component along
+    // every direction (equal entries would cancel along a loop of two equal branches).
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t hash = static_cast<std::uint32_t>(i + 1) * 2654435761u;
+      direction[i] = (hash & 0x8000u ? -1.0 : 1.0) * (1 + static_cast<double>(hash >> 22) / 1024);
+    }
+    for (int iteration = 0; iteration < 2; ++iteration) {
+      newton.solve(direction);
+      const double norm = weighted_max_norm(direction, inverse_weight_x);
+      if (!(norm > 0) || !std::isfinite(norm)) return mode;
+      direction /= norm;
+    }
+    if (!evaluate_guards(t_at, x_at + direction, guards_moved)) return mode;
+    int most = -1;
+    for (int k = 0; k < predicate_count; ++k)
+      if (!fixed[k] && (most < 0 || std::abs(guards_moved[k] - guards_at[k]) > std::abs(guards_moved[most] - guards_at[most])))
+        most = k;
+    if (most < 0 || guards_moved[most] == guards_at[most]) return mode;
+    flipped[most] = !flipped[most];
+    fixed[most] = 1;
+  }
+  return flipped;
 }
 
 // Before the first step: IDA's estimate, the first-order change over the step within half a

@@ -192,9 +192,9 @@ EvalStatus NewtonMatrix::charge_determined(double t, const Vector& x, const Pred
 }
 
 NewtonMatrix::Outcome NewtonMatrix::factor_shifted(double t, const Vector& x, const Predicates& p,
-                                                   double shift) {
+                                                   double shift, double cj) {
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
-  matrix_ = load_.df_dx;
+  for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
   for (int i = 0; i < pattern_.size(); ++i) matrix_[diagonal_[i]] += shift;
   return factor_loaded();
 }

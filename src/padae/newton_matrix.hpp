@@ -28,8 +28,9 @@ class NewtonMatrix {
   // (System::constant_jacobian) is loaded once per mode, and a factorization of the same matrix
   // (same mode, same cj) is not repeated.
   Outcome factor(double t, const Vector& x, const Predicates& p, double cj, double keep_within = 0);
-  // df/dx + shift I: pseudo-transient continuation toward a steady state.
-  Outcome factor_shifted(double t, const Vector& x, const Predicates& p, double shift);
+  // df/dx + cj dq/dx + shift I: pseudo-transient continuation toward a steady state (cj = 0),
+  // inverse iteration toward what a singular matrix leaves undetermined.
+  Outcome factor_shifted(double t, const Vector& x, const Predicates& p, double shift, double cj = 0);
   // As factor(), for the blend (1 - lambda) * system(p_from) + lambda * system(p_to) used by the
   // continuation in re-initialization. Leaves load() holding the blended f and q.
   Outcome factor_blend(double t, const Vector& x, const Predicates& p_from, const Predicates& p_to,

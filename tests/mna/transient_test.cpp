@@ -298,6 +298,49 @@ TEST(Jump, IdealSwitchClosingAcrossAConductingIdealDiodeTurnsItOff) {
   EXPECT_NEAR(run.states.back()[a], 0, 1e-12);
 }
 
+TEST(Jump, FullBridgeDiagonalSwitchesCloseAcrossTwoFreewheelingDiodes) {
+  // A full-bridge inverter with an RL load, ideal switches and antiparallel ideal diodes (all
+  // without resistance). S1 and S4 conduct until 500.5 us; in the 10 us dead time D2 and D3
+  // carry the load current back to the supply; at 510.5 us S2 and S3 close across them together:
+  // each pair's current split is undetermined with both on, so both diodes turn off. v(a, b)
+  // is +-100 V from each switch-off (the diodes take over at once), and i(L) follows the
+  // exponentials towards +-10 A with tau = L / R = 1 ms.
+  const double vdc = 100, r = 10, l = 10e-3;
+  CircuitSpec c;
+  c.add("vdc", {"p", "0"}, vdc);
+  c.add("vg1", {"g1", "0"}).waveform = {Waveform::Shape::pulse, {0, 5, 10e-6, 1e-6, 1e-6, 489e-6, 1e-3}};
+  c.add("vg2", {"g2", "0"}).waveform = {Waveform::Shape::pulse, {0, 5, 510e-6, 1e-6, 1e-6, 489e-6, 1e-3}};
+  for (auto [name, a, b, gate] : {std::tuple{"s1", "p", "a", "g1"}, {"s4", "b", "0", "g1"}, {"s2", "a", "0", "g2"}, {"s3", "p", "b", "g2"}}) {
+    auto& s = c.add(name, {a, b, gate, "0"});
+    s.model = {{"vt", 2.5}, {"vh", 0.0}, {"ron", 0.0}, {"roff", infinity}};
+  }
+  for (auto [name, anode, cathode] : {std::tuple{"d1", "a", "p"}, {"d2", "0", "a"}, {"d3", "b", "p"}, {"d4", "0", "b"}})
+    c.add(name, {anode, cathode}).model = {{"ideal", 1}};
+  c.add("r1", {"a", "x"}, r);
+  c.add("l1", {"x", "b"}, l);
+  c.add("rbias", {"a", "0"}, 1e9);  // the operating point's voltages with every switch open
+  c.add("rbias2", {"b", "0"}, 1e9);
+  Model m(c, {.tstep = 1e-6, .tstop = 2e-3});
+  const Simulation run = simulate(m, 2e-3, false);
+  ASSERT_TRUE(run.ok) << run.failure;
+  auto current = [&](double t) {
+    if (t < 10.5e-6) return 0.0;
+    double i = 0, from = 10.5e-6, v = vdc;
+    for (double edge = 500.5e-6;; edge += 500e-6, v = -v) {
+      const double to = std::min(edge, t);
+      i = v / r + (i - v / r) * std::exp(-(to - from) * r / l);
+      from = to;
+      if (edge >= t) return i;
+    }
+  };
+  const int il = unknown(m, "i(l1)");
+  for (std::size_t k = 0; k < run.times.size(); ++k) EXPECT_NEAR(run.states[k][il], current(run.times[k]), 1e-5) << run.times[k];
+  const auto closing = std::find_if(run.events.begin(), run.events.end(), [](const auto& e) { return std::abs(e.t - 510.5e-6) < 1e-9; });
+  ASSERT_NE(closing, run.events.end());
+  for (const char* diode : {"i(d2)", "i(d3)"}) EXPECT_NEAR(closing->x_after[unknown(m, diode)], 0, 1e-9) << diode;
+  EXPECT_NEAR(closing->x_after[unknown(m, "i(s2)")], -current(510.5e-6), 1e-5);
+}
+
 TEST(Events, IdealDiodeClampConductsAtEveryPeakOfTheSine) {
   // A DC restorer: C couples a 5 V, 10 kHz sine to out, an ideal diode (VFWD 0.3) clamps out at
   // 0.3 V, RL loads out (tau = RL C = 0.1 s). The diode conducts from where out reaches 0.3 V

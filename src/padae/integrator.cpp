@@ -968,6 +968,10 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
   std::optional<Predicates> stalled_mode;
   std::vector<char> flipped_by_event;
   int next_single_flip = 0;
+  // The flips the located crossing itself asks for (none at the start): a singular mode is left
+  // by undoing the fixed point's flips only where keeping them all leaves no other way.
+  std::vector<char> crossed(static_cast<std::size_t>(predicate_count), 0);
+  for (int k = 0; k < predicate_count; ++k) crossed[k] = target_in[k] != p[k];
 
   for (int iteration = 1;; ++iteration) {
     if (iteration > options.max_event_iterations) {
@@ -1027,9 +1031,13 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       if (!retry && reinitializer.stalled_state()) {
         if (!stalled_mode) {
           stalled_mode = p, flipped_by_event = flipped_here;
-          const Predicates undetermined =
-              undetermined_flipped(t_at, *reinitializer.stalled_state(), p, 1 / h_reference, flipped_by_event);
-          if (undetermined != p) retry = undetermined;
+          for (const std::vector<char>* kept : {&flipped_by_event, &crossed}) {
+            const Predicates undetermined = undetermined_flipped(t_at, *reinitializer.stalled_state(), p, 1 / h_reference, *kept);
+            if (undetermined != p) {
+              retry = undetermined;
+              break;
+            }
+          }
         }
         while (!retry && next_single_flip < predicate_count && flipped_by_event[next_single_flip]) ++next_single_flip;
         if (!retry && next_single_flip < predicate_count) {

@@ -332,12 +332,19 @@ class Session {
     progress_ = std::make_unique<Progress>(!options_.quiet, settings_.tstop);
     try {
       const mna::Start start = mna::find_start(*model_, 0, uic_, integrator_options_);
-      try {
-        mna::check_mode_structure(*model_, start_kind(), start.p);
-      } catch (const mna::ModelError& e) {
-        print_error(e.what());
-        return bad_input;
-      }
+      // The modes the start is in: the operating point's, or (uic) the guards' at the initial
+      // conditions, from which the initialization's fixed point may still reach a regular mode
+      // (a current source's diodes turning on): checked when it does not.
+      auto mode_structure_refused = [&]() {
+        try {
+          mna::check_mode_structure(*model_, start_kind(), start.p);
+        } catch (const mna::ModelError& e) {
+          print_error(e.what());
+          return true;
+        }
+        return false;
+      };
+      if (!uic_ && mode_structure_refused()) return bad_input;
       // A start that fails on linear, singular equations is bad input (exit 2), named as such.
       auto singular = [&]() {
         const std::string why = mna::singular_linear_equations(*model_, start_kind(), start.p, 0, settings_.tstop);
@@ -349,7 +356,7 @@ class Session {
         return fail(0, "no initial operating point: " + start.message, start.worst_unknown);
       }
       if (!integrator_->initialize(0, start.x, start.p)) {
-        if (singular()) return bad_input;
+        if ((uic_ && mode_structure_refused()) || singular()) return bad_input;
         return fail(integrator_->failure());
       }
       emit(0, integrator_->state());

@@ -1009,14 +1009,18 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
     consistent = reinitializer.jump(t_at, x_jumped, previous, p, h_reference);
     const std::optional<Vector>& failed_at =
         reinitializer.stalled_state() ? reinitializer.stalled_state() : reinitializer.outside_domain_state();
-    if (!consistent && failed_at && predicate_count > 0) {
+    // Where the new mode leaves a direction undetermined: continuation stalled near it, or its
+    // matrix is singular.
+    const std::optional<Vector>& undetermined_at =
+        reinitializer.stalled_state() ? reinitializer.stalled_state() : reinitializer.singular_state();
+    if (!consistent && (failed_at || undetermined_at) && predicate_count > 0) {
       std::optional<Predicates> retry;
       // The new mode has no consistent state; the guards where continuation stalled say which
       // other predicates change with the ones that flipped (the diode that an ideal switch
       // closing across it turns off), and so do the guards where the mode left its domain (a
       // guard at zero at the event, on its other side as the motion goes on).
       Vector guards_stalled(predicate_count);
-      if (evaluate_guards(t_at, *failed_at, guards_stalled)) {
+      if (failed_at && evaluate_guards(t_at, *failed_at, guards_stalled)) {
         Predicates rescue = p;
         for (int k = 0; k < predicate_count; ++k)
           if (!flipped_here[k]) rescue[k] = guards_stalled[k] > 0;
@@ -1026,13 +1030,14 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
       // both without resistance or forward voltage, leaves the split of the current between them
       // undetermined; with the diode off it is not, and the diode's guard (its voltage, 0) keeps
       // it off. So first the predicates whose guards move along what the mode leaves undetermined
-      // flip, one per undetermined direction (the two legs of a full bridge); then the modes with
-      // one more predicate flipped, each in turn.
-      if (!retry && reinitializer.stalled_state()) {
+      // flip, one per undetermined direction (the two legs of a full bridge; a current source's
+      // diodes, off at a start from initial conditions); then the modes with one more predicate
+      // flipped, each in turn.
+      if (!retry && undetermined_at) {
         if (!stalled_mode) {
           stalled_mode = p, flipped_by_event = flipped_here;
           for (const std::vector<char>* kept : {&flipped_by_event, &crossed}) {
-            const Predicates undetermined = undetermined_flipped(t_at, *reinitializer.stalled_state(), p, 1 / h_reference, *kept);
+            const Predicates undetermined = undetermined_flipped(t_at, *undetermined_at, p, 1 / h_reference, *kept);
             if (undetermined != p) {
               retry = undetermined;
               break;

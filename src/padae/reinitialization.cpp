@@ -55,6 +55,7 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
         }
         failure_reason_ = "the circuit equations are singular in the new mode";
         failure_unknown_ = newton_.singular_column();
+        if (lambda == 1) singular_state_ = x;
         return false;
       }
     } else if (!evaluate()) {
@@ -132,6 +133,7 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
                                                    const Predicates& p_from,
                                                    const Predicates& p_to, double h_reference) {
   stalled_state_.reset();
+  singular_state_.reset();
   failure_unknown_ = -1;
   if (newton_.evaluate(t, x_start, p_from) != EvalStatus::ok) {
     outside_domain_at(t, x_start, {&p_from}, "the model cannot be evaluated at the event");

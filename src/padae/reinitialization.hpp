@@ -63,6 +63,9 @@ class Reinitializer {
   // domain), if that is why it failed. A guard at zero at the event may be on its other side
   // there, as the motion goes on (abs() of a sine starting at 0, under a sqrt).
   const std::optional<Vector>& outside_domain_state() const { return outside_domain_state_; }
+  // After a failed jump: the state where the new mode's matrix was singular, if that is why it
+  // failed (a current source whose path the mode opens, a loop of ideal elements it closes).
+  const std::optional<Vector>& singular_state() const { return singular_state_; }
 
  private:
   // Backward Euler of length h from charges q_start, for the blend of modes
@@ -91,6 +94,7 @@ class Reinitializer {
   int failure_unknown_ = -1;
   std::optional<Vector> stalled_state_;
   std::optional<Vector> outside_domain_state_;
+  std::optional<Vector> singular_state_;
 };
 
 }  // namespace padae

@@ -435,6 +435,28 @@ TEST(Start, IdealDiodeBridgeFromInitialConditionsTurnsOneOfItsLoopOff) {
   expect_bridge_commutates_as_closed_form(1e9, true);
 }
 
+TEST(Start, IdealDiodeBridgeFromRestTurnsOnTheCurrentSourcesDiodes) {
+  // The bridge from rest (uic, i(Ls) = 0) with the source at its zero: with every diode off the
+  // current source has no path. All four conduct (the source shorted through Ls, the load's
+  // current split between the legs) until i(Ls) = (Vm / (w Ls)) (1 - cos w t) reaches Id, when
+  // D3 turns off.
+  const double vm = 100, w = 2 * std::numbers::pi * 50, ls = 5e-3, id = 10;
+  CircuitSpec c;
+  c.add("vs", {"s", "0"}).waveform = {Waveform::Shape::sine, {0, vm, 50}};
+  c.add("ls", {"s", "a"}, ls);
+  for (auto [name, anode, cathode] : {std::tuple{"d1", "a", "p"}, {"d2", "0", "p"}, {"d3", "n", "a"}, {"d4", "n", "0"}})
+    c.add(name, {anode, cathode}).model = {{"ideal", 1}};
+  c.add("iload", {"p", "n"}, id);
+  Model m(c, {.tstep = 1e-5, .tstop = 4e-3});
+  const Simulation run = simulate(m, 4e-3, true, 1e-8);
+  ASSERT_TRUE(run.ok) << run.failure;
+  ASSERT_FALSE(run.events.empty());
+  const double t_full = std::acos(1 - id * w * ls / vm) / w;
+  EXPECT_NEAR(run.events[0].t, t_full, 1e-9);
+  EXPECT_NEAR(run.events[0].x_after[unknown(m, "i(ls)")], id, 1e-6);
+  EXPECT_NEAR(run.events[0].x_after[unknown(m, "i(d3)")], 0, 1e-6);
+}
+
 TEST(Start, HeldInitialVoltageThenRelaxes) {
   // .ic v(out)=2 without uic: the op holds it, then the capacitor relaxes toward 1 V with
   // tau = (R1 || R2) C.

@@ -140,7 +140,7 @@ struct Integrator::Impl {
   // The first step after a (re)start is the trapezoidal rule from the re-initialization's q'
   // (unless the order is held at 1); its error is tested as backward Euler's, the only estimate
   // one point allows, which bounds the trapezoidal rule's.
-  bool trapezoidal_start() const { return order_used == 0 && options.max_order >= 2; }
+  bool trapezoidal_start() const { return order_used == 0 && options.max_order >= 2 && !fast_mode_left; }
   bool trapezoidal_method_step() const { return options.method == Method::trapezoidal && order == 2; }
   bool trapezoidal_step() const { return trapezoidal_method_step() || trapezoidal_start(); }
   void complete_step(double error_k, double error_k_minus_1, int order_new);
@@ -310,6 +310,10 @@ struct Integrator::Impl {
   int order = 1, order_used = 0, constant_steps = 0;
   bool virtual_point_in_history = false;  // the trapezoidal start's (complete_step)
   bool startup_phase = true;
+  // The restart's state leaves a mode faster than the re-initialization's steps to the
+  // integration: the trapezoidal rule would flip its sign step by step (a 1e-17 s RL, an ideal
+  // diode's ROFF against its inductor, swung v(sw) from -18 V to +18 V), backward Euler damps it.
+  bool fast_mode_left = false;
   double h = 0, h_used = 0, cj = 0, error_coefficient = 0;
   // The step the error control chose for the last step, before it was shortened to end on a
   // source corner or a stop: a restart there starts from it (the shortened step says nothing
@@ -348,7 +352,7 @@ Integrator::Impl::Impl(System& system_in, Options options_in)
                                              })),
       resolvable_tolerance(absolute_tolerance),
       newton(system_in, statistics, absolute_tolerance / options.rtol),
-      reinitializer(system_in, newton, statistics, options, resolvable_tolerance) {
+      reinitializer(system_in, newton, statistics, options, resolvable_tolerance, peak_magnitude) {
   every_unknown.resize(n);
   peak_magnitude.setZero(n);
   std::iota(every_unknown.begin(), every_unknown.end(), 0);
@@ -719,6 +723,12 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
 
 StepOutcome Integrator::Impl::step(double t_stop) {
   if (!(t_stop > t)) return fail(t, "step() called with t_stop " + format_number(t_stop, 17) + " not after t = " + format_number(t, 17));
+  // A stop within the time resolution (a source corner computed an ulp before TSTOP): the state
+  // at t is the state there, and a step that short would be singular (C / h swamps the rest).
+  if (t_stop - t < minimum_step()) {
+    t = t_stop;
+    return {StepKind::stop, t};
+  }
   const double t_old = t;
   step_predicates = p;
   const Vector guards_old = guards_now;
@@ -1338,6 +1348,7 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   q_derivative = consistent.q_derivative;
   order = 1;
   order_used = 0;
+  fast_mode_left = consistent.fast_mode_left;
   virtual_point_in_history = false;
   last_accepted = {};
   h_used = 0;

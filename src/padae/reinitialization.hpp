@@ -39,14 +39,18 @@ struct ConsistentState {
   Vector x_derivative;  // right derivative of x, from the look-ahead (for prediction only)
   Vector impulse;       // integral of each unknown over the jump (empty without a jump)
   bool charges_moved = false;  // q changed at the jump beyond round-off
+  // A mode faster than every settling step moves the charges from x: it is left to the
+  // integration, whose first step must then damp it (backward Euler, not the trapezoidal rule).
+  bool fast_mode_left = false;
   double t_heading = 0; // a point just after t on the new motion
   Vector x_heading;
 };
 
 class Reinitializer {
  public:
+  // peak_magnitude: each unknown's largest magnitude so far (the error test's peak floor).
   Reinitializer(System& system, NewtonMatrix& newton, Statistics& statistics,
-                const Options& options, const Vector& absolute_tolerance);
+                const Options& options, const Vector& absolute_tolerance, const Vector& peak_magnitude);
 
   // The state after the predicates changed from p_from to p_to at t; x_start already holds
   // the explicit jumps X e. h_reference: a step size typical of the solution near t.
@@ -90,6 +94,7 @@ class Reinitializer {
   Statistics& statistics_;
   const Options& options_;
   const Vector& absolute_tolerance_;
+  const Vector& peak_magnitude_;
   std::string failure_reason_;
   int failure_unknown_ = -1;
   std::optional<Vector> stalled_state_;

@@ -29,6 +29,7 @@ Simulation simulate(Model& model, double tstop, bool uic, double rtol = 1e-7) {
   options.rtol = rtol;
   options.time_scale = tstop;
   options.max_step = std::min(tstop / 50, model.resolution_step());  // as the command does
+  options.peak_floor = 1e-3;                                          // as the command does
   model.set_tolerances({.voltage = 1e-9, .current = 1e-12});
   check_structure(model, uic ? StartKind::initial_conditions : StartKind::operating_point);
   Start start = find_start(model, 0, uic, options);
@@ -339,6 +340,45 @@ TEST(Jump, FullBridgeDiagonalSwitchesCloseAcrossTwoFreewheelingDiodes) {
   ASSERT_NE(closing, run.events.end());
   for (const char* diode : {"i(d2)", "i(d3)"}) EXPECT_NEAR(closing->x_after[unknown(m, diode)], 0, 1e-9) << diode;
   EXPECT_NEAR(closing->x_after[unknown(m, "i(s2)")], -current(510.5e-6), 1e-5);
+}
+
+TEST(Jump, BuckBoostDiodeTurnOffLeavesTheSwitchNodeAtZero) {
+  // An inverting buck-boost (ideal switch and diode, ROFF 1e12) in discontinuous conduction:
+  // when D1's current reaches zero, L1 holds no current and no voltage, so v(sw) = 0 until the
+  // switch closes. The event leaves picoamperes in L1, which ROFF drains in 1e-17 s: a fast mode
+  // that moves less charge than a step's error. It must neither be integrated with the
+  // trapezoidal rule (v(sw) swung -18 V -> +18 V) nor shift the rows.
+  CircuitSpec c;
+  c.add("vin", {"in", "0"}, 20.0);
+  c.add("vg", {"g", "0"}).waveform = {Waveform::Shape::pulse, {0, 5, 0, 20e-9, 20e-9, 6e-6, 20e-6}};
+  auto& s1 = c.add("s1", {"in", "sw", "g", "0"});
+  s1.model = {{"vt", 2.5}, {"vh", 0.0}, {"ron", 0.0}, {"roff", 1e12}};
+  c.add("l1", {"sw", "0"}, 20e-6);
+  c.add("d1", {"out", "sw"}).model = {{"ideal", 1}, {"roff", 1e12}};
+  c.add("c1", {"out", "0"}, 22e-6);
+  c.add("rl", {"out", "0"}, 20.0);
+  Model m(c, {.tstep = 20e-9, .tstop = 1e-3});
+  const Simulation run = simulate(m, 1e-3, false, 1e-3);
+  ASSERT_TRUE(run.ok) << run.failure;
+  const int sw = unknown(m, "v(sw)"), out = unknown(m, "v(out)");
+  // D1 turning off by itself (not as the switch closes, in continuous conduction).
+  auto flips = [&](const padae::EventRecord& event, const std::string& element) {
+    return std::any_of(event.flips.begin(), event.flips.end(),
+                       [&](const auto& f) { return m.predicate_owner(f.predicate).name() == element; });
+  };
+  int turn_offs = 0;
+  for (const auto& event : run.events)
+    if (flips(event, "d1") && !flips(event, "s1")) {
+      ++turn_offs;
+      EXPECT_NEAR(event.x_after[sw], 0, 1e-3) << "t = " << event.t;
+    }
+  EXPECT_GE(turn_offs, 20);
+  // Between a turn-off and the switch closing, the rows are at 0 V too; v(sw) never leaves
+  // [v(out), vin].
+  for (std::size_t k = 0; k < run.times.size(); ++k) {
+    EXPECT_LE(run.states[k][sw], 20 + 1e-6) << "t = " << run.times[k];
+    EXPECT_GE(run.states[k][sw], run.states[k][out] - 1e-6) << "t = " << run.times[k];
+  }
 }
 
 TEST(Events, IdealDiodeClampConductsAtEveryPeakOfTheSine) {

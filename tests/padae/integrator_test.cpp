@@ -52,6 +52,24 @@ TEST(Integrator, DecayIsAccurateToTheToleranceAndConvergesAsItTightens) {
   }
 }
 
+TEST(Integrator, StopWithinTheTimeResolutionIsReachedWithoutAStep) {
+  // A source corner computed as 200 * 1e-6 lies an ulp before TSTOP = 2e-4: the step left is
+  // shorter than the time resolution, and the state there is the state at TSTOP.
+  Decay decay(3.0);
+  Integrator integrator(decay, Options{});
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+  const double corner = 200 * 1e-6, t_stop = 2e-4;
+  ASSERT_LT(corner, t_stop);
+  ASSERT_TRUE(run_until(integrator, corner));
+  const double x_at_corner = integrator.state()[0];
+  const long steps = integrator.statistics().steps;
+  const StepOutcome outcome = integrator.step(t_stop);
+  EXPECT_EQ(outcome.kind, StepKind::stop);
+  EXPECT_EQ(integrator.time(), t_stop);
+  EXPECT_EQ(integrator.state()[0], x_at_corner);
+  EXPECT_EQ(integrator.statistics().steps, steps);
+}
+
 // x'' = -x as a first-order system: the step-size and order controller must reach high order.
 class Oscillator : public SemiExplicitSystem {
  public:

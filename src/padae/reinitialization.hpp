@@ -15,9 +15,10 @@
 // shows where the new motion is heading (convention (9) applied to the new mode). The settling
 // steps are long enough to be well conditioned where the vanishing step is not (a capacitor
 // without a DC path: C/h swamps its conductances), and the extrapolation keeps them accurate.
-// The extrapolation keeps the charges the steps start from; where it does not, a mode faster
-// than the steps moved them (the steps see it settled), and shorter steps, or else the
-// vanishing step's state, leave that mode to the integration. When Newton fails on the new mode, the paper's continuation in a parameter blends the
+// The extrapolation keeps the charges the steps start from (to within the error test's
+// tolerance); where it does not, a mode faster than the steps moved them (the steps see it
+// settled), and shorter steps, or else the vanishing step's state, leave that mode to the
+// integration. When Newton fails on the new mode, the paper's continuation in a parameter blends the
 // residuals of the old and the new mode.
 #pragma once
 

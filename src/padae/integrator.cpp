@@ -138,7 +138,7 @@ struct Integrator::Impl {
   // the estimates at orders k and k - 1 that choose the next order.
   bool error_test(double& error, double& error_k, double& error_k_minus_1, int& order_new);
   // The first step after a (re)start is the trapezoidal rule from the re-initialization's q'
-  // (unless the order is held at 1); its error is tested as backward Euler's, the only estimate
+  // (unless the order is held at 1, or a fast mode is left to the integration); its error is tested as backward Euler's, the only estimate
   // one point allows, which bounds the trapezoidal rule's.
   bool trapezoidal_start() const { return order_used == 0 && options.max_order >= 2 && !fast_mode_left; }
   bool trapezoidal_method_step() const { return options.method == Method::trapezoidal && order == 2; }
@@ -404,7 +404,7 @@ void Integrator::Impl::update_weights() {
   inverse_weight_x = (options.rtol * x.cwiseAbs() + resolvable_tolerance).cwiseInverse();
   // The error is tested on the dynamic rows' q, in the units of x: a row's tolerance is the
   // charge its unknowns' tolerances represent (for q_i = x_i, IDA's rtol |x_i| + atol_i).
-  error_scale = x.cwiseAbs().cwiseMax(options.peak_floor * peak_magnitude);
+  error_scale = padae::error_scale(x, peak_magnitude, options.peak_floor);
   newton.charge_scale(options.rtol * error_scale + absolute_tolerance, charge_weight);
   inverse_weight_q.resize(n);
   for (int i = 0; i < n; ++i)

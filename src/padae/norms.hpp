@@ -8,6 +8,12 @@ namespace padae {
 
 double weighted_max_norm(const Vector& v, const Vector& inverse_weight, int* worst = nullptr);
 
+// The magnitude the error test applies rtol to: |x_i|, or at least peak_floor of the unknown's
+// peak so far (Options::peak_floor).
+inline Vector error_scale(const Vector& x, const Vector& peak, double peak_floor) {
+  return x.cwiseAbs().cwiseMax(peak_floor * peak);
+}
+
 // A Newton correction (norm in tolerance units) that no longer contracts on a fresh matrix.
 inline bool stalled(double norm, double previous_norm) { return norm >= 0.5 * previous_norm; }
 // Stalled within the tolerance: the round-off floor of the solves (tight tolerances,

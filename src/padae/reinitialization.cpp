@@ -226,7 +226,7 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   // a step's error may settle (an ideal diode's ROFF draining its inductor's last 40 pA in
   // 1e-17 s; ROFF = 1e9 against 2 mH moving 4e-7 A of 15 A in 2 ps).
   Vector charge_tolerance;
-  newton_.charge_scale(options_.rtol * x_plus.cwiseAbs().cwiseMax(options_.peak_floor * peak_magnitude_) + absolute_tolerance_,
+  newton_.charge_scale(options_.rtol * error_scale(x_plus, peak_magnitude_, options_.peak_floor) + absolute_tolerance_,
                        charge_tolerance);
   const Vector inverse_charge_weight =
       charge_tolerance.unaryExpr([](double w) { return w > 0 ? 1 / w : 0.0; });

@@ -279,8 +279,9 @@ std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_p
   // tenth of the error tolerance the vanishing step lost the hidden algebraic directions. The
   // state takes their charges, but keeps q' from the extrapolation, whose algebraic unknowns
   // were solved with its own differential ones: across a small resistance (a diode's RS of
-  // 20 mOhm) the 1e-10 V between the two is a current that -f would pass into q' as charge
-  // created on a cut-set (10 nA into a rectifier's floating load, 2e-5 V on its common mode).
+  // 10 mOhm) the difference between the two is a current that -f would pass into q' as charge
+  // created on a cut-set (22 uA where three source inductors close it: a three-phase bridge
+  // stopped at t = 0).
   if (charges_kept && weighted_max_norm(x_plus - extrapolated, differential_weight) <= 0.1) {
     for (int i = 0; i < system_.size(); ++i)
       if (system_.kind(i) == UnknownKind::differential) state.x[i] = x_plus[i];

@@ -1138,10 +1138,10 @@ Predicates Integrator::Impl::undetermined_flipped(double t_at, const Vector& x_a
   if (!evaluate_guards(t_at, x_at, guards_at)) return mode;
   while (newton.factor(t_at, x_at, flipped, cj) == NewtonMatrix::Outcome::singular) {
     if (newton.factor_shifted(t_at, x_at, flipped, kShift, cj) != NewtonMatrix::Outcome::ok) return mode;
-    // Signs and sizes from the bits of a multiplicative hash: a start with a component along
-    // every direction (equal entries would cancel along a loop of two equal branches).
+    // Signs and sizes from scrambled bits: a start with a component along every direction
+    // (equal entries would cancel along a loop of two equal branches).
     for (int i = 0; i < n; ++i) {
-      const std::uint32_t hash = static_cast<std::uint32_t>(i + 1) * 2654435761u;
+      const std::uint32_t hash = scrambled(i + 1);
       direction[i] = (hash & 0x8000u ? -1.0 : 1.0) * (1 + static_cast<double>(hash >> 22) / 1024);
     }
     for (int iteration = 0; iteration < 2; ++iteration) {

@@ -2,8 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <limits>
+
+#include "padae/norms.hpp"
 
 namespace padae {
 
@@ -239,8 +240,8 @@ bool NewtonMatrix::within_roundoff(const Vector& v, double tolerances, const Vec
   roundoff_ = other_terms.cwiseAbs();
   add_absolute_product(matrix_, x, roundoff_);
   for (int row = 0; row < pattern_.size(); ++row) {
-    // Signs from the bits of a multiplicative hash: independent of the circuit's structure.
-    const bool negative = (static_cast<std::uint32_t>(row) * 2654435761u) & 0x8000u;
+    // Signs that do not cancel systematically.
+    const bool negative = scrambled(row) & 0x8000u;
     roundoff_[row] *= auxiliary_[row] ? 0.0 : (negative ? -1.0 : 1.0) * std::numeric_limits<double>::epsilon();
   }
   lu_.solve(roundoff_);

@@ -2,6 +2,8 @@
 // iterate is never taken as small). Shared by the integrator and re-initialization.
 #pragma once
 
+#include <cstdint>
+
 #include "padae/system.hpp"
 
 namespace padae {
@@ -13,6 +15,10 @@ double weighted_max_norm(const Vector& v, const Vector& inverse_weight, int* wor
 inline Vector error_scale(const Vector& x, const Vector& peak, double peak_floor) {
   return x.cwiseAbs().cwiseMax(peak_floor * peak);
 }
+
+// Knuth's multiplicative hash of an index: bits independent of the circuit's structure, for
+// start vectors and rounding signs that must not cancel systematically.
+inline std::uint32_t scrambled(int index) { return static_cast<std::uint32_t>(index) * 2654435761u; }
 
 // A Newton correction (norm in tolerance units) that no longer contracts on a fresh matrix.
 inline bool stalled(double norm, double previous_norm) { return norm >= 0.5 * previous_norm; }

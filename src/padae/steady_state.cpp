@@ -82,9 +82,8 @@ class SteadyStateSolver {
   // The predicate whose guard most contradicts mode p at x; -1 if none does (or the guards
   // cannot be evaluated there).
   int most_contradicted(const Vector& x, const Predicates& p) {
-    Vector values(system_.predicate_count());
-    values.setZero();
-    if (system_.guards(t_, x, values) != EvalStatus::ok) return -1;
+    Vector values;
+    if (!guard_values(x, values)) return -1;
     int worst = -1;
     for (int k = 0; k < system_.predicate_count(); ++k)
       if ((values[k] > 0) != static_cast<bool>(p[k]) && (worst < 0 || std::abs(values[k]) > std::abs(values[worst])))
@@ -105,10 +104,14 @@ class SteadyStateSolver {
     return -1;
   }
 
+  bool guard_values(const Vector& x, Vector& values) {
+    values.setZero(system_.predicate_count());
+    return system_.guards(t_, x, values) == EvalStatus::ok;
+  }
+
   bool guards(const Vector& x, Predicates& p) {
-    Vector values(system_.predicate_count());
-    values.setZero();
-    if (system_.guards(t_, x, values) != EvalStatus::ok) return false;
+    Vector values;
+    if (!guard_values(x, values)) return false;
     for (int k = 0; k < system_.predicate_count(); ++k) p[k] = values[k] > 0;
     return true;
   }

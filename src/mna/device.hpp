@@ -128,11 +128,18 @@ class Stamper {
   std::vector<Declared> declared_;
 };
 
+// Each charge a device loads, in the order loaded, at the state the model measures charges
+// from (padae::System::measure_charges_from). Empty: charges are absolute.
+struct ChargeReference {
+  std::vector<double> charges;
+  bool recording = false;  // the evaluation at the reference state fills `charges`
+};
+
 // One model evaluation as a device sees it.
 class Evaluation {
  public:
-  Evaluation(double t, const Vector& x, const padae::Predicates& p, padae::Load& out)
-      : t(t), x(x), p(p), out_(out) {}
+  Evaluation(double t, const Vector& x, const padae::Predicates& p, padae::Load& out, ChargeReference& reference)
+      : t(t), x(x), p(p), out_(out), reference_(reference) {}
   const double t;
   const Vector& x;
   const padae::Predicates& p;
@@ -140,7 +147,19 @@ class Evaluation {
   double value(int unknown) const { return mna::value(x, unknown); }
   bool jacobian() const { return out_.jacobian_requested; }
   void f(int row, double value) { if (row != ground) out_.f[row] += value; }
-  void q(int row, double value) { if (row != ground) out_.q[row] += value; }
+  // Each charge enters its row as its change from the reference: a row then sums changes and
+  // rounds to their size, while a device's own rounding cancels between its two rows.
+  void q(int row, double value) {
+    if (row == ground) return;
+    if (reference_.recording) {
+      reference_.charges.push_back(value);
+      return;
+    }
+    if (!reference_.charges.empty()) value -= reference_.charges.at(charges_loaded_++);
+    out_.q[row] += value;
+  }
+  // How many charges the devices loaded (against the reference's count).
+  std::size_t charges_loaded() const { return charges_loaded_; }
   // Derivatives count only when asked for: an evaluation without them must leave the arrays
   // as they are (a constant Jacobian is kept in them).
   void df(int slot, double value) { if (slot >= 0 && out_.jacobian_requested) out_.df_dx[slot] += value; }
@@ -150,6 +169,8 @@ class Evaluation {
 
  private:
   padae::Load& out_;
+  ChargeReference& reference_;
+  std::size_t charges_loaded_ = 0;
 };
 
 // How a device connects nodes, for the structural checks before a run.

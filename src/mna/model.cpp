@@ -176,8 +176,11 @@ Model::Model(CircuitSpec circuit, const RunSettings& settings) : circuit_(std::m
 }
 
 padae::EvalStatus Model::load(double t, const Vector& x, const padae::Predicates& p, padae::Load& out) {
-  Evaluation e(t, x, p, out);
+  Evaluation e(t, x, p, out, charge_reference_);
   for (const auto& d : devices_) d->load(e);
+  if (e.charges_loaded() != charge_reference_.charges.size() && !charge_reference_.charges.empty())
+    throw std::logic_error("the devices loaded " + std::to_string(e.charges_loaded()) + " charges, " +
+                           std::to_string(charge_reference_.charges.size()) + " at the charges' reference");
   if (holding_) hold_rows(x, out);
   // Outside a device's domain (sqrt of a negative voltage, an overflowing exponential): say so,
   // and padae cuts the step instead of factoring garbage.
@@ -187,6 +190,17 @@ padae::EvalStatus Model::load(double t, const Vector& x, const padae::Predicates
   if (!out.f.allFinite() || !out.q.allFinite()) return padae::EvalStatus::outside_domain;
   if (out.jacobian_requested && !(finite(out.df_dx) && finite(out.dq_dx))) return padae::EvalStatus::outside_domain;
   return padae::EvalStatus::ok;
+}
+
+bool Model::measure_charges_from(double t, const Vector& x, const padae::Predicates& p) {
+  charge_reference_.charges.clear();
+  charge_reference_.recording = true;
+  reference_load_.f.setZero(size());
+  reference_load_.q.setZero(size());
+  Evaluation e(t, x, p, reference_load_, charge_reference_);
+  for (const auto& d : devices_) d->load(e);
+  charge_reference_.recording = false;
+  return true;
 }
 
 void Model::hold_rows(const Vector& x, padae::Load& out) const {

@@ -38,6 +38,8 @@ class Model final : public padae::System {
   bool time_event_rows(double t, std::vector<int>& rows) const override;
   double absolute_tolerance(int unknown, double default_atol) const override;
   double newton_step_fraction(const Vector& x, const Vector& x_next) const override;
+  // Every device's charges from their values at x (ChargeReference).
+  bool measure_charges_from(double t, const Vector& x, const padae::Predicates& p) override;
   // Every device's derivatives depend on the predicates alone. (Holding the .ic voltages changes
   // the held rows' derivatives: it is set for the whole life of a solver, never within one.)
   bool constant_jacobian() const override { return constant_jacobian_; }
@@ -103,6 +105,8 @@ class Model final : public padae::System {
   std::vector<int> predicate_owners_;  // index in predicate_devices_ of each predicate
   int predicate_count_ = 0;
   Tolerances tolerances_;
+  ChargeReference charge_reference_;
+  padae::Load reference_load_;  // scratch of measure_charges_from()
   std::map<int, double> held_nodes_;
   std::map<int, double> nodesets_;
   std::vector<std::vector<int>> held_row_slots_;  // value positions in each held row

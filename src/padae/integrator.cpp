@@ -215,6 +215,9 @@ struct Integrator::Impl {
   Predicates undetermined_flipped(double t_at, const Vector& x_at, const Predicates& mode, double cj,
                                   const std::vector<char>& kept);
   void restart(double t_at, const ConsistentState& consistent);
+  // The system's charges measured from (x_at, p) (System::measure_charges_from), the ones held
+  // shifted to match.
+  void measure_charges_from(double t_at, const Vector& x_at);
 
   StepOutcome fail(double t_at, std::string reason, int unknown = -1, std::string diagnosis = {}) {
     failure = Failure{t_at, std::move(reason), unknown, std::move(diagnosis)};
@@ -952,8 +955,14 @@ StepOutcome Integrator::Impl::handle_state_event(double t_left, const Vector& gu
   }
 
   t = t_event;
-  ++statistics.events;
+  const Predicates mode_before = p;
   if (!settle(t_event, x_before, target, true)) return {StepKind::failed, t};
+  // A crossing located within the guard's tolerance of a tangency (a clamp's diode turning off
+  // at the sine's peak, its current and voltage at their thresholds together) can lead to a mode
+  // that heads straight back: the fixed point then ends in the mode it left, nothing changed,
+  // and the step ends as an ordinary one (restarted), the real crossing being the next event.
+  if (p == mode_before && !last_event.jumped) return {StepKind::accepted, t};
+  ++statistics.events;
   return {StepKind::event, t};
 }
 
@@ -964,6 +973,9 @@ bool Integrator::Impl::settle(double t_at, const Vector& x_start, const Predicat
   last_event = EventRecord{};
   last_event.t = t_at;
   last_event.x_before = x_start;
+  // The re-initialization's steps and the restart's first ones are the shortest, and divide the
+  // charges' rounding by h: measured from here, the charges are small.
+  measure_charges_from(t_at, x_start);
   Vector x_jumped = x_start;
   Predicates target = target_in;
   std::vector<char> flipped_here(static_cast<std::size_t>(predicate_count), 0);
@@ -1313,6 +1325,14 @@ std::optional<Vector> Integrator::Impl::step_solution(DenseOutput& solver, doubl
     x = std::move(*solved);
   }
   return x;
+}
+
+void Integrator::Impl::measure_charges_from(double t_at, const Vector& x_at) {
+  if (newton.evaluate(t_at, x_at, p) != EvalStatus::ok) return;
+  const Vector shift = newton.load().q;
+  if (!system.measure_charges_from(t_at, x_at, p)) return;
+  phi_q[0] -= shift;
+  if (previous_step.order > 0) previous_step.phi_q[0] -= shift;
 }
 
 // Order 1 from a consistent state, as after the initial point (IDA's first step).

@@ -180,12 +180,15 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   auto consistent = settle(t, x_plus, q_plus, p_to, h_settle);
   if (!consistent) return consistent;
   consistent->impulse = h_impulse * x_plus;
-  // A jump moves q by far more than the smooth motion does over the impulse step.
+  // A jump moves q by far more than the smooth motion does over the impulse step, and than the
+  // rounding of the charges it sums (of their size |dq/dx| |x|: q itself may be measured from
+  // any reference).
+  Vector charge_size;
+  newton_.charge_scale(x_start.cwiseAbs().cwiseMax(x_plus.cwiseAbs()), charge_size);
   for (Eigen::Index i = 0; i < q_before.size(); ++i) {
     double moved = std::abs(q_plus[i] - q_before[i]);
     double smooth = 10 * h_impulse * std::abs(consistent->q_derivative[i]);
-    double scale = std::abs(q_plus[i]) + std::abs(q_before[i]);
-    if (moved > smooth + 1e-10 * scale + std::numeric_limits<double>::min()) consistent->charges_moved = true;
+    if (moved > smooth + 1e-10 * charge_size[i] + std::numeric_limits<double>::min()) consistent->charges_moved = true;
   }
   return consistent;
 }

@@ -116,6 +116,20 @@ class System {
     return 1;
   }
 
+  // Only changes of q enter the equations, so q may be measured from any reference. A row sums
+  // the charges of the elements at a node, and rounds to the largest: a capacitor holding 1e-4 C
+  // rounds each of its two rows by about 1e-20 C, differently, and a network connected to the
+  // rest only by inductors (a rectifier bridge fed from inductive sources) sees the difference as
+  // charge created on it, a current of 1e-20 C / h that at the picosecond steps of a start swamps
+  // the network's tolerance. The integrator calls this at every (re)start, with the state it starts
+  // from; a model may then load each element's charge as its change from its value at (x, p),
+  // rows rounding to the size of the changes. Returns whether it did (the integrator then
+  // shifts the charges it holds by the old q(x, p)).
+  virtual bool measure_charges_from(double t, const Vector& x, const Predicates& p) {
+    (void)t, (void)x, (void)p;
+    return false;
+  }
+
   // Unknown scale for the tolerance: the absolute tolerance of unknown i in its own units.
   // Default: Options::atol for all.
   virtual double absolute_tolerance(int unknown, double default_atol) const {

@@ -39,6 +39,31 @@ TEST(DeviceLoad, CapacitorChargeAndStoredEnergy) {
   EXPECT_DOUBLE_EQ(m.stored_energy(x), 0.5 * 1e-6 * 16);
 }
 
+TEST(DeviceLoad, ChargesFromAReferenceCancelExactlyAcrossTheirPairOfRows) {
+  // A 1 uF capacitor at 156 V between p and n (1.56e-4 C), 100 pF from each to a. Measured from
+  // a reference state, each row sums changes: p's and n's rows add up to the small capacitors'
+  // changes alone (3e-17 C) to those capacitors' own rounding (eps x 1.6e-8 C), where absolute
+  // charges round each row by some 3e-20 C.
+  CircuitSpec c;
+  c.add("cs", {"p", "n"}, 1e-6);
+  c.add("c1", {"p", "a"}, 1e-10);
+  c.add("c2", {"n", "a"}, 1e-10);
+  Model m(c, {});
+  const int p = unknown(m, "v(p)"), n = unknown(m, "v(n)"), a = unknown(m, "v(a)");
+  Vector reference(3), moved(3);
+  reference[p] = 156.3, reference[n] = 0.2, reference[a] = 0.1;
+  moved = reference;
+  moved[p] += 1e-7, moved[n] += 2e-7;
+  ASSERT_TRUE(m.measure_charges_from(0, reference, {}));
+  EXPECT_TRUE(evaluate(m, 0, reference, {}).q.isZero(0));
+  const auto l = evaluate(m, 0, moved, {});
+  const double common_mode = 1e-10 * (moved[p] - reference[p]) + 1e-10 * (moved[n] - reference[n]);
+  EXPECT_NEAR(l.q[p] + l.q[n], common_mode, 1e-22);
+  EXPECT_NEAR(l.q[p], 1e-6 * ((moved[p] - moved[n]) - (reference[p] - reference[n])) + 1e-10 * (moved[p] - reference[p]),
+              1e-15);
+  EXPECT_NEAR(l.q[a], -common_mode, 1e-22);
+}
+
 TEST(DeviceLoad, CoupledInductorsFluxRows) {
   CircuitSpec c;
   c.add("l1", {"a", "0"}, 4e-3);

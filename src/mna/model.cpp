@@ -178,7 +178,8 @@ Model::Model(CircuitSpec circuit, const RunSettings& settings) : circuit_(std::m
 padae::EvalStatus Model::load(double t, const Vector& x, const padae::Predicates& p, padae::Load& out) {
   Evaluation e(t, x, p, out, charge_reference_);
   for (const auto& d : devices_) d->load(e);
-  if (e.charges_loaded() != charge_reference_.charges.size() && !charge_reference_.charges.empty())
+  if (!charge_reference_.recording && !charge_reference_.charges.empty() &&
+      e.charges_loaded() != charge_reference_.charges.size())
     throw std::logic_error("the devices loaded " + std::to_string(e.charges_loaded()) + " charges, " +
                            std::to_string(charge_reference_.charges.size()) + " at the charges' reference");
   if (holding_) hold_rows(x, out);
@@ -197,8 +198,7 @@ bool Model::measure_charges_from(double t, const Vector& x, const padae::Predica
   charge_reference_.recording = true;
   reference_load_.f.setZero(size());
   reference_load_.q.setZero(size());
-  Evaluation e(t, x, p, reference_load_, charge_reference_);
-  for (const auto& d : devices_) d->load(e);
+  load(t, x, p, reference_load_);
   charge_reference_.recording = false;
   return true;
 }

@@ -138,8 +138,9 @@ struct Integrator::Impl {
   // the estimates at orders k and k - 1 that choose the next order.
   bool error_test(double& error, double& error_k, double& error_k_minus_1, int& order_new);
   // The first step after a (re)start is the trapezoidal rule from the re-initialization's q'
-  // (unless the order is held at 1, or a fast mode is left to the integration); its error is tested as backward Euler's, the only estimate
-  // one point allows, which bounds the trapezoidal rule's.
+  // (unless the order is held at 1, or a fast mode is left to the integration); its error is
+  // tested as backward Euler's, the only estimate one point allows, which bounds the
+  // trapezoidal rule's.
   bool trapezoidal_start() const { return order_used == 0 && options.max_order >= 2 && !fast_mode_left; }
   bool trapezoidal_method_step() const { return options.method == Method::trapezoidal && order == 2; }
   bool trapezoidal_step() const { return trapezoidal_method_step() || trapezoidal_start(); }

@@ -156,6 +156,8 @@ struct Integrator::Impl {
   enum class Interpolated { value, derivative };
   enum class Quantity { x, q };
   Vector interpolate(double t_at, Interpolated what = Interpolated::value, Quantity of = Quantity::x) const;
+  // The same into out (sized n): no allocation, for the per-step screening of the guards.
+  void interpolate(double t_at, Vector& out, Interpolated what = Interpolated::value, Quantity of = Quantity::x) const;
   // The value of x's polynomial for the listed unknowns only, into out (sized n).
   void interpolate(double t_at, std::span<const int> unknowns, Vector& out) const;
   double first_step_estimate(double t_at, const Vector& x_at);
@@ -206,8 +208,8 @@ struct Integrator::Impl {
                                              const Vector& guards_right);
   // The guards on the solution at t_at, if one is crossed there.
   std::optional<GuardSample> confirmed_crossing(double t_at);
-  Vector screened_guards;               // scratch of crossing_inside()
-  std::vector<double> screened_times;   // scratch of crossing_inside()
+  Vector screened_guards, screened_state;  // scratch of crossing_inside()
+  std::vector<double> screened_times;      // scratch of crossing_inside()
   DenseOutput& locator();
   StepOutcome handle_state_event(double t_left, const Vector& guards_left, double t_right,
                                  const Vector& guards_right);
@@ -337,7 +339,7 @@ struct Integrator::Impl {
   long step_of_matrix = 0;
   double convergence_factor = 20;
 
-  Vector inverse_weight_x, inverse_weight_q, charge_weight;
+  Vector inverse_weight_x, inverse_weight_q, charge_weight, charge_tolerance;
   Vector peak_magnitude, error_scale;  // largest |x| so far; the magnitude rtol applies to
   Vector x_predicted, q_predicted, q_derivative_predicted, x_new, q_new, delta, residual;
   double newton_start_fraction = 1;  // how far toward x_predicted Newton starts (predict())
@@ -409,7 +411,8 @@ void Integrator::Impl::update_weights() {
   // The error is tested on the dynamic rows' q, in the units of x: a row's tolerance is the
   // charge its unknowns' tolerances represent (for q_i = x_i, IDA's rtol |x_i| + atol_i).
   error_scale = padae::error_scale(x, peak_magnitude, options.peak_floor);
-  newton.charge_scale(options.rtol * error_scale + absolute_tolerance, charge_weight);
+  charge_tolerance = options.rtol * error_scale + absolute_tolerance;
+  newton.charge_scale(charge_tolerance, charge_weight);
   inverse_weight_q.resize(n);
   for (int i = 0; i < n; ++i)
     inverse_weight_q[i] = charge_weight[i] > 0 ? 1.0 / charge_weight[i] : 0.0;
@@ -889,7 +892,8 @@ std::optional<Integrator::Impl::GuardSample> Integrator::Impl::crossing_inside(d
   const double half = 0.5 * (t_right - t_left), t_middle = t_left + half;
   Vector& guards = screened_guards;
   guards.resize(predicate_count);
-  if (!evaluate_guards(t_middle, interpolate(t_middle), guards)) return std::nullopt;
+  interpolate(t_middle, screened_state);
+  if (!evaluate_guards(t_middle, screened_state, guards)) return std::nullopt;
   if (crossed(guards)) return confirmed_crossing(t_middle);
   std::vector<double>& vertices = screened_times;
   vertices.clear();
@@ -903,7 +907,8 @@ std::optional<Integrator::Impl::GuardSample> Integrator::Impl::crossing_inside(d
   }
   std::sort(vertices.begin(), vertices.end());
   for (double t_at : vertices) {
-    if (!evaluate_guards(t_at, interpolate(t_at), guards)) return std::nullopt;
+    interpolate(t_at, screened_state);
+    if (!evaluate_guards(t_at, screened_state, guards)) return std::nullopt;
     if (crossed(guards)) return confirmed_crossing(t_at);
   }
   return std::nullopt;
@@ -1190,12 +1195,17 @@ double Integrator::Impl::first_step_estimate(double t_at, const Vector& x_at) {
 // IDA's IDAGetSolution (IDAGetDky for the derivative): the interpolating polynomial of the
 // last step.
 Vector Integrator::Impl::interpolate(double t_at, Interpolated what, Quantity of) const {
+  Vector result;
+  interpolate(t_at, result, what, of);
+  return result;
+}
+
+void Integrator::Impl::interpolate(double t_at, Vector& out, Interpolated what, Quantity of) const {
   const StepView step = last_step();
   const auto weights = polynomial_weights(step.anchor, step.order, step.psi, t_at, what);
   const auto& phi = of == Quantity::x ? step.phi_x : step.phi_q;
-  Vector result = weights[0] * phi[0];
-  for (int j = 1; j <= step.order; ++j) result += weights[j] * phi[j];
-  return result;
+  out = weights[0] * phi[0];
+  for (int j = 1; j <= step.order; ++j) out += weights[j] * phi[j];
 }
 
 void Integrator::Impl::interpolate(double t_at, std::span<const int> unknowns, Vector& out) const {
@@ -1338,8 +1348,17 @@ void Integrator::Impl::measure_charges_from(double t_at, const Vector& x_at) {
 
 // Order 1 from a consistent state, as after the initial point (IDA's first step).
 void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
-  if (order_used > 0) previous_step = Polynomial{anchor, order_used, phi_x, phi_q, psi, step_predicates, statistics.steps,
-                                               corner_inside};
+  // Assigned member by member: the vectors keep their storage (a restart at every event).
+  if (order_used > 0) {
+    previous_step.anchor = anchor;
+    previous_step.order = order_used;
+    previous_step.phi_x = phi_x;
+    previous_step.phi_q = phi_q;
+    previous_step.psi = psi;
+    previous_step.p = step_predicates;
+    previous_step.number = statistics.steps;
+    previous_step.corner_inside = corner_inside;
+  }
   anchor = t_at;
   t = t_at;
   x = consistent.x;

@@ -11,8 +11,9 @@ namespace padae {
 double weighted_max_norm(const Vector& v, const Vector& inverse_weight, int* worst = nullptr);
 
 // The magnitude the error test applies rtol to: |x_i|, or at least peak_floor of the unknown's
-// peak so far (Options::peak_floor).
-inline Vector error_scale(const Vector& x, const Vector& peak, double peak_floor) {
+// peak so far (Options::peak_floor). An expression on x and peak, evaluated where it is
+// assigned (the integrator's per-step weights reuse their vector).
+inline auto error_scale(const Vector& x, const Vector& peak, double peak_floor) {
   return x.cwiseAbs().cwiseMax(peak_floor * peak);
 }
 

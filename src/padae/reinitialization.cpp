@@ -67,7 +67,8 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     }
     ++statistics_.newton_iterations;
     const Load& load = newton_.load();
-    Vector delta = (load.q - q_start) * cj + load.f;
+    Vector& delta = delta_;
+    delta = (load.q - q_start) * cj + load.f;
     for (int i : newton_.auxiliary_unknowns()) delta[i] = x[i] - held[i];
     newton_.solve(delta);
     // A step the model limits (a junction sent from reverse bias far into conduction) is taken
@@ -75,8 +76,8 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     const double fraction = newton_.step_fraction(x, x - delta);
     x -= fraction * delta;
     // The tolerance never asks for less than round-off in x.
-    Vector inverse_weight =
-        ((options_.rtol + 100 * kEps) * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
+    Vector& inverse_weight = inverse_weight_;
+    inverse_weight = ((options_.rtol + 100 * kEps) * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
     int worst = -1;
     const double norm = weighted_max_norm(delta, inverse_weight, &worst);
     if (!std::isfinite(norm)) {

@@ -101,6 +101,7 @@ class Reinitializer {
   std::optional<Vector> stalled_state_;
   std::optional<Vector> outside_domain_state_;
   std::optional<Vector> singular_state_;
+  Vector delta_, inverse_weight_;  // backward_euler()'s Newton correction and weights
 };
 
 }  // namespace padae

@@ -35,6 +35,7 @@
 #include "padae/norms.hpp"
 #include "padae/reinitialization.hpp"
 #include "padae/root_finder.hpp"
+#include "padae/row_refinement.hpp"
 #include "padae/subnormals.hpp"
 #include "padae/text.hpp"
 
@@ -163,18 +164,19 @@ struct Integrator::Impl {
   double first_step_estimate(double t_at, const Vector& x_at);
   // x at t_at inside the last step as a step of its order from its start would reach it
   // (dense_output.hpp); empty where Newton finds no solution.
-  std::optional<Vector> step_solution(DenseOutput& solver, double t_at) const;
+  // Newton starts from guess if given.
+  std::optional<Vector> step_solution(DenseOutput& solver, double t_at, const Vector* guess = nullptr) const;
   // step_solution(), or the polynomial's x counted in statistics.unsolved_points.
   Vector solution_or_polynomial(DenseOutput& solver, Statistics& counted_in, double t_at) const;
-  // Whether the last step's polynomial is as good as its solution for these unknowns. The error
-  // test controls the charges, and so the unknowns that are functions of one charge each. The
-  // polynomial of any other unknown (an algebraic one, or one in a hidden algebraic direction
-  // such as a floating capacitor's common mode) is measured once per step, at its midpoint
-  // (near where the error of a polynomial between its last two points is largest), against
-  // step_solution there. A source corner the step passed reaches only the unknowns of its own
-  // block of the pattern, all algebraic (corner_can_reach), which bend there where no
-  // polynomial can.
-  bool polynomial_serves(std::span<const int> unknowns);
+  // Where an output row at t_at inside the last step comes from, for these unknowns. The error
+  // test controls the charges, and so the unknowns that are functions of one charge each: the
+  // polynomial serves for them. Any other unknown (an algebraic one, or one in a hidden
+  // algebraic direction such as a floating capacitor's common mode) comes from the polynomial
+  // or from step_solution interpolated, where checks certify them (row_refinement.hpp), else
+  // it is solved. A source corner the step passed reaches only the unknowns of its own block
+  // of the pattern, all algebraic (corner_can_reach), which bend there where no interpolant
+  // can: they are solved.
+  RowRefinement::Row row_source(double t_at, std::span<const int> unknowns);
   bool charges_determine(std::span<const int> unknowns);
   // The accepted step whose polynomial interpolate() and step_solution() use: previous_step
   // after a restart, else the current history's (its end may be another step's end too: both
@@ -248,12 +250,7 @@ struct Integrator::Impl {
   Vector output_row;  // dense_output()'s for the listed unknowns
   std::vector<int> every_unknown;  // 0 ... n - 1, what dense_output(t) asks for
   DenseOutput& writer();
-  // Per unknown, the distance of step number `step`'s polynomial from its solution at the
-  // step's midpoint, in tolerance units (polynomial_serves).
-  struct MidpointCheck {
-    long step = -1;
-    Vector miss;
-  } midpoint_check;
+  RowRefinement output_refinement;  // of the last step's rows (row_source)
   // NewtonMatrix::charge_determined in mode `mode` (a mode may switch charges in or out).
   struct ChargeDetermined {
     Predicates mode;
@@ -1244,24 +1241,19 @@ std::array<double, kHistory> Integrator::Impl::polynomial_weights(double anchor_
   return weights;
 }
 
-bool Integrator::Impl::polynomial_serves(std::span<const int> unknowns) {
+RowRefinement::Row Integrator::Impl::row_source(double t_at, std::span<const int> unknowns) {
+  using Row = RowRefinement::Row;
   const StepView step = last_step();
-  if (step.order == 0) return true;  // a point: no step yet
+  if (step.order == 0) return Row::polynomial;  // a point: no step yet
   if (step.corner_inside)
     for (int i : unknowns)
-      if (corner_can_reach[i]) return false;
-  if (charges_determine(unknowns)) return true;
-  if (midpoint_check.step != step.number) {
-    const double midpoint = step.anchor - step.psi[0] / 2;
-    midpoint_check.step = step.number;
-    // Where the midpoint has no solution, nothing certifies the polynomial: the rows are solved.
-    const auto solved = step_solution(writer(), midpoint);
-    midpoint_check.miss = solved ? Vector((*solved - interpolate(midpoint)).cwiseAbs().cwiseProduct(inverse_weight_x))
-                                 : Vector::Constant(n, std::numeric_limits<double>::infinity());
-  }
-  for (int i : unknowns)
-    if (midpoint_check.miss[i] > 1) return false;
-  return true;
+      if (corner_can_reach[i]) return Row::solved;
+  if (charges_determine(unknowns)) return Row::polynomial;
+  auto polynomial = [&](double t_of, Vector& out) { interpolate(t_of, out); };
+  if (output_refinement.step() != step.number)
+    output_refinement.reset(step.number, step.anchor - step.psi[0], step.anchor, polynomial);
+  auto solve = [&](double t_of, const Vector& guess) { return step_solution(writer(), t_of, &guess); };
+  return output_refinement.row(t_at, unknowns, inverse_weight_x, polynomial, solve);
 }
 
 bool Integrator::Impl::charges_determine(std::span<const int> unknowns) {
@@ -1304,7 +1296,7 @@ Vector Integrator::Impl::solution_or_polynomial(DenseOutput& solver, Statistics&
   return interpolate(t_at);
 }
 
-std::optional<Vector> Integrator::Impl::step_solution(DenseOutput& solver, double t_at) const {
+std::optional<Vector> Integrator::Impl::step_solution(DenseOutput& solver, double t_at, const Vector* guess) const {
   const StepView step = last_step();
   // The points S passes through before the step's end are t_j = end - psi_j, j < order.
   auto c_at = [&](double t_of) {
@@ -1317,14 +1309,14 @@ std::optional<Vector> Integrator::Impl::step_solution(DenseOutput& solver, doubl
   // a thousandth of the step's residual anyway.
   const double c_max = kMaxStiffening * c_at(step.anchor);
   // Newton from guess, or without one from where DenseOutput::solve chooses.
-  auto solve_at = [&](double t_of, const Vector* guess) {
-    return solver.solve(step.number, t_of, guess, interpolate(t_of),
+  auto solve_at = [&](double t_of, const Vector* start) {
+    return solver.solve(step.number, t_of, start, interpolate(t_of),
                         interpolate(t_of, Interpolated::value, Quantity::q),
                         interpolate(t_of, Interpolated::derivative, Quantity::q), step.p,
                         std::min(c_at(t_of), c_max));
   };
   if (step.order == 0) return interpolate(t_at);
-  if (auto solved = solve_at(t_at, nullptr)) return std::move(*solved);
+  if (auto solved = solve_at(t_at, guess)) return std::move(*solved);
   // Newton from the polynomial can fail where it is far from the solution (the common mode of
   // a load floating between junctions): continuation from the step's start, where the state is
   // known, through points each twice as far from it, each solve starting from the last.
@@ -1432,7 +1424,7 @@ bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   s.peak_magnitude = x0.cwiseAbs();
   s.located.clear();
   s.located_step = -1;
-  s.midpoint_check.step = -1;
+  s.output_refinement = {};
   s.update_weights();
   // The initial point is made consistent as an event is (jump projection, predicate fixed
   // point); that is the start, not an event, so it is neither counted nor recorded.
@@ -1462,11 +1454,19 @@ const Vector& Integrator::dense_output(double t_at, std::span<const int> unknown
   SubnormalsFlushed flushed;
   Impl& s = *impl_;
   if (const Vector* located = s.remembered_solution(t_at)) return *located;
-  if (s.polynomial_serves(unknowns)) {
-    s.output_row.resize(s.n);
-    s.interpolate(t_at, unknowns, s.output_row);
-  } else {
-    s.output_row = s.solution_or_polynomial(s.writer(), s.output_statistics, t_at);
+  switch (s.row_source(t_at, unknowns)) {
+    case RowRefinement::Row::polynomial:
+      s.output_row.resize(s.n);
+      s.interpolate(t_at, unknowns, s.output_row);
+      break;
+    case RowRefinement::Row::interpolated:
+      s.output_row.resize(s.n);
+      s.interpolate(t_at, unknowns, s.output_row);
+      s.output_refinement.interpolate(t_at, unknowns, s.output_row);
+      break;
+    case RowRefinement::Row::solved:
+      s.output_row = s.solution_or_polynomial(s.writer(), s.output_statistics, t_at);
+      break;
   }
   return s.output_row;
 }

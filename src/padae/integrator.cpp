@@ -902,7 +902,9 @@ std::optional<Integrator::Impl::GuardSample> Integrator::Impl::crossing_inside(d
     const double offset = 0.5 * (before - after) / curvature;  // in half steps
     if (std::abs(offset) < 1 && at - 0.25 * (before - after) * offset > 0) vertices.push_back(t_middle + offset * half);
   }
+  // Guards driven by one source (switches on one clock) share their vertex: sampled once.
   std::sort(vertices.begin(), vertices.end());
+  vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
   for (double t_at : vertices) {
     interpolate(t_at, screened_state);
     if (!evaluate_guards(t_at, screened_state, guards)) return std::nullopt;

@@ -250,7 +250,9 @@ struct Integrator::Impl {
   Vector output_row;  // dense_output()'s for the listed unknowns
   std::vector<int> every_unknown;  // 0 ... n - 1, what dense_output(t) asks for
   DenseOutput& writer();
-  RowRefinement output_refinement;  // of the last step's rows (row_source)
+  // Of the last step's rows (row_source).
+  RowRefinement output_refinement{[this](double t_of, Vector& out) { interpolate(t_of, out); },
+                                  [this](double t_of, const Vector& guess) { return step_solution(writer(), t_of, &guess); }};
   // NewtonMatrix::charge_determined in mode `mode` (a mode may switch charges in or out).
   struct ChargeDetermined {
     Predicates mode;
@@ -1251,11 +1253,8 @@ RowRefinement::Row Integrator::Impl::row_source(double t_at, std::span<const int
     for (int i : unknowns)
       if (corner_can_reach[i]) return Row::solved;
   if (charges_determine(unknowns)) return Row::polynomial;
-  auto polynomial = [&](double t_of, Vector& out) { interpolate(t_of, out); };
-  if (output_refinement.step() != step.number)
-    output_refinement.reset(step.number, step.anchor - step.psi[0], step.anchor, polynomial);
-  auto solve = [&](double t_of, const Vector& guess) { return step_solution(writer(), t_of, &guess); };
-  return output_refinement.row(t_at, unknowns, inverse_weight_x, polynomial, solve);
+  if (output_refinement.step() != step.number) output_refinement.reset(step.number, step.anchor - step.psi[0], step.anchor);
+  return output_refinement.row(t_at, unknowns, inverse_weight_x);
 }
 
 bool Integrator::Impl::charges_determine(std::span<const int> unknowns) {
@@ -1426,7 +1425,7 @@ bool Integrator::initialize(double t0, const Vector& x0, const Predicates& p0) {
   s.peak_magnitude = x0.cwiseAbs();
   s.located.clear();
   s.located_step = -1;
-  s.output_refinement = {};
+  s.output_refinement.forget();
   s.update_weights();
   // The initial point is made consistent as an event is (jump projection, predicate fixed
   // point); that is the start, not an event, so it is neither counted nor recorded.

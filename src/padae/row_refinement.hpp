@@ -26,6 +26,7 @@
 #include <functional>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "padae/system.hpp"
@@ -34,13 +35,18 @@ namespace padae {
 
 class RowRefinement {
  public:
-  // The solution at t, Newton starting from guess; empty where Newton fails.
+  // The solution at t inside the current step, Newton starting from guess; empty where Newton
+  // fails.
   using Solve = std::function<std::optional<Vector>(double t, const Vector& guess)>;
-  // The step's polynomial S at t, into out.
+  // The current step's polynomial S at t, into out.
   using Polynomial = std::function<void(double t, Vector& out)>;
 
+  RowRefinement(Polynomial polynomial, Solve solve) : polynomial_(std::move(polynomial)), solve_(std::move(solve)) {}
+
   // Starts step number `step` from t_start to t_end (where S is the solution).
-  void reset(long step, double t_start, double t_end, const Polynomial& polynomial);
+  void reset(long step, double t_start, double t_end);
+  // Forgets the step (the integration restarted).
+  void forget() { step_ = -1; }
   long step() const { return step_; }
 
   enum class Row {
@@ -50,8 +56,7 @@ class RowRefinement {
   };
   // Where a row at t comes from for the listed unknowns, within 1 / inverse_weight; checks and
   // splits the interval holding t as needed.
-  Row row(double t, std::span<const int> unknowns, const Vector& inverse_weight, const Polynomial& polynomial,
-          const Solve& solve);
+  Row row(double t, std::span<const int> unknowns, const Vector& inverse_weight);
   // The interpolated solution at t (where row() says so) into out's listed unknowns, which hold
   // S(t) on entry.
   void interpolate(double t, std::span<const int> unknowns, Vector& out) const;
@@ -77,12 +82,13 @@ class RowRefinement {
 
   // The solution at the interval's midpoint and its misses, in a new node; kUnsolved where
   // Newton fails.
-  int check(const Interval& interval, const Vector& inverse_weight, const Polynomial& polynomial, const Solve& solve);
+  int check(const Interval& interval, const Vector& inverse_weight);
   // Whether the interval's checks certify its interpolant for the unknowns.
   bool certified(const Interval& interval, std::span<const int> unknowns) const;
+  // Whether certifying the interval by splitting it would take more solves than its rows.
+  bool splitting_costs_more(const Interval& interval, std::span<const int> unknowns) const;
   // Replaces the interval at index by its two halves, checked.
-  void split(std::size_t index, std::span<const int> unknowns, const Vector& inverse_weight,
-             const Polynomial& polynomial, const Solve& solve);
+  void split(std::size_t index, std::span<const int> unknowns, const Vector& inverse_weight);
   std::size_t interval_at(double t) const;
   // The Lagrange weights at t of the interval's quadratics (nodes start, middle, end).
   std::array<double, 3> weights(const Interval& interval, double t) const;
@@ -90,12 +96,15 @@ class RowRefinement {
   Node& node(int index) { return nodes_[static_cast<std::size_t>(index)]; }
   const Node& node(int index) const { return nodes_[static_cast<std::size_t>(index)]; }
 
+  Polynomial polynomial_;
+  Solve solve_;
   long step_ = -1;
   std::vector<Node> nodes_;  // reused from step to step: entries beyond node_count_ are spare
   int node_count_ = 0;
   std::vector<Interval> intervals_;  // in time order, covering the step
   double last_row_ = 0, row_spacing_ = 0;
-  Vector polynomial_, by_solution_, by_deviation_;  // check()'s scratch
+  long first_splits_ = 0, first_splits_passed_ = 0;  // whole steps split, and whose halves both served
+  Vector polynomial_at_, by_solution_, by_deviation_;  // check()'s scratch
 };
 
 }  // namespace padae

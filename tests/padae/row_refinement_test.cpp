@@ -22,7 +22,6 @@ struct Written {
 
 Written write_rows(const std::function<double(double)>& solution, const std::function<double(double)>& polynomial,
                    double tolerance, int rows) {
-  RowRefinement refinement;
   Written written;
   const std::vector<int> unknowns{0};
   const Vector inverse_weight = Vector::Constant(1, 1 / tolerance);
@@ -31,11 +30,12 @@ Written write_rows(const std::function<double(double)>& solution, const std::fun
     ++written.solves;
     return Vector::Constant(1, solution(t));
   };
-  refinement.reset(7, 0.0, 1.0, polynomial_at);
+  RowRefinement refinement(polynomial_at, solve);
+  refinement.reset(7, 0.0, 1.0);
   for (int k = 1; k <= rows; ++k) {
     const double t = static_cast<double>(k) / rows;
     Vector value(1);
-    switch (refinement.row(t, unknowns, inverse_weight, polynomial_at, solve)) {
+    switch (refinement.row(t, unknowns, inverse_weight)) {
       case Row::polynomial:
         ++written.polynomial_rows;
         polynomial_at(t, value);
@@ -101,7 +101,6 @@ TEST(RowRefinement, RowsNearAKinkAreSolved) {
 }
 
 TEST(RowRefinement, WithoutASolutionAtTheMidpointEveryRowIsSolved) {
-  RowRefinement refinement;
   const std::vector<int> unknowns{0};
   auto polynomial = [](double t, Vector& out) { out = Vector::Constant(1, t); };
   int solves = 0;
@@ -109,9 +108,9 @@ TEST(RowRefinement, WithoutASolutionAtTheMidpointEveryRowIsSolved) {
     ++solves;
     return std::nullopt;
   };
-  refinement.reset(1, 0.0, 1.0, polynomial);
-  for (double t : {0.1, 0.4, 0.6, 0.9})
-    EXPECT_EQ(refinement.row(t, unknowns, Vector::Ones(1), polynomial, no_solution), Row::solved);
+  RowRefinement refinement(polynomial, no_solution);
+  refinement.reset(1, 0.0, 1.0);
+  for (double t : {0.1, 0.4, 0.6, 0.9}) EXPECT_EQ(refinement.row(t, unknowns, Vector::Ones(1)), Row::solved);
   EXPECT_EQ(solves, 1);
 }
 

@@ -17,9 +17,9 @@
 //  - S plus the quadratic through the solution's deviation from S: where S has the solution's
 //    shape but misses by a few tolerances (a junction's current while it conducts).
 // An interval's interpolant is fixed when the interval is made, so a split elsewhere never
-// changes a certified interval. Splitting stops where the halves would hold too few rows for
-// their checks to save solves, or after kMaxDepth halvings; the rows of an interval that does
-// not serve are solved (a kink: a junction turning on inside the step).
+// changes a certified interval. Splitting stops where the checks it would take outnumber the
+// rows they would spare (splitting_costs_more), or after kMaxDepth halvings; the rows of an
+// interval that does not serve are solved (a kink: a junction turning on inside the step).
 #pragma once
 
 #include <array>

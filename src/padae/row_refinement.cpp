@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace padae {
 
@@ -71,14 +72,21 @@ int RowRefinement::check(const Interval& interval, const Vector& inverse_weight)
   return index;
 }
 
+const Vector& RowRefinement::miss(const Interval& interval, int checked) const {
+  return interval.by_deviation ? node(checked).miss_by_deviation : node(checked).miss_by_solution;
+}
+
+double RowRefinement::worst(const Vector& miss, std::span<const int> unknowns) {
+  double largest = 0;
+  for (int i : unknowns) {
+    if (std::isnan(miss[i])) return std::numeric_limits<double>::infinity();
+    largest = std::max(largest, miss[i]);
+  }
+  return largest;
+}
+
 bool RowRefinement::certified(const Interval& interval, std::span<const int> unknowns) const {
-  auto within = [&](int checked) {
-    if (checked < 0) return false;
-    const Vector& miss = interval.by_deviation ? node(checked).miss_by_deviation : node(checked).miss_by_solution;
-    for (int i : unknowns)
-      if (!(miss[i] <= 1)) return false;
-    return true;
-  };
+  auto within = [&](int checked) { return checked >= 0 && worst(miss(interval, checked), unknowns) <= 1; };
   // The whole step's check is its own sibling.
   return within(interval.check) && (interval.sibling_check == interval.check || within(interval.sibling_check));
 }
@@ -95,16 +103,15 @@ void RowRefinement::split(std::size_t index, std::span<const int> unknowns, cons
   left.check = right.sibling_check = check(left, inverse_weight);
   right.check = left.sibling_check = check(right, inverse_weight);
   // The interpolant that predicts the pair's checks better.
-  auto worst = [&](bool by_deviation) {
+  auto pair_worst = [&](bool by_deviation) {
+    Interval pair = left;
+    pair.by_deviation = by_deviation;
     double largest = 0;
-    for (int checked : {left.check, right.check}) {
-      if (checked < 0) continue;
-      const Vector& miss = by_deviation ? node(checked).miss_by_deviation : node(checked).miss_by_solution;
-      for (int i : unknowns) largest = std::max(largest, miss[i]);
-    }
+    for (int checked : {left.check, right.check})
+      if (checked >= 0) largest = std::max(largest, worst(miss(pair, checked), unknowns));
     return largest;
   };
-  left.by_deviation = right.by_deviation = worst(true) < worst(false);
+  left.by_deviation = right.by_deviation = pair_worst(true) < pair_worst(false);
   if (parent.depth == 0) {
     ++first_splits_;
     if (certified(left, unknowns) && certified(right, unknowns)) ++first_splits_passed_;
@@ -125,13 +132,10 @@ bool RowRefinement::splitting_costs_more(const Interval& interval, std::span<con
     const double pass_rate = (first_splits_passed_ + 1.0) / (first_splits_ + 3.0);
     return 2 / pass_rate >= rows;
   }
-  const Vector& miss =
-      interval.by_deviation ? node(interval.check).miss_by_deviation : node(interval.check).miss_by_solution;
-  double worst = 0;
-  for (int i : unknowns) worst = std::max(worst, miss[i]);
-  if (!std::isfinite(worst)) return true;
+  double largest = worst(miss(interval, interval.check), unknowns);
+  if (!std::isfinite(largest)) return true;
   int halvings = 1;
-  while (worst > 8 && halvings < kMaxDepth) worst /= 8, ++halvings;
+  while (largest > 8 && halvings < kMaxDepth) largest /= 8, ++halvings;
   return std::ldexp(2.0, halvings) - 2 >= rows;
 }
 

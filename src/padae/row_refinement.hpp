@@ -83,6 +83,10 @@ class RowRefinement {
   // The solution at the interval's midpoint and its misses, in a new node; kUnsolved where
   // Newton fails.
   int check(const Interval& interval, const Vector& inverse_weight);
+  // The misses of the interval's interpolant at a check node.
+  const Vector& miss(const Interval& interval, int checked) const;
+  // The largest of the listed unknowns' misses; infinite where one is NaN.
+  static double worst(const Vector& miss, std::span<const int> unknowns);
   // Whether the interval's checks certify its interpolant for the unknowns.
   bool certified(const Interval& interval, std::span<const int> unknowns) const;
   // Whether certifying the interval by splitting it would take more solves than its rows.

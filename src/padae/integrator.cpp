@@ -556,7 +556,7 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
       // q at the new point, which the history needs exactly (charge conservation).
       if (newton.evaluate(t_new, x_new, p) != EvalStatus::ok) return NewtonOutcome::outside_domain;
       if (converged) break;  // on the exact matrix: no confirming correction
-      track_iterate_error();
+      if (mode == Newton::modified_fresh) track_iterate_error();  // what step() asks of a divergence
       continue;
     }
     // A convergence judged from a remembered rate must really hold: the next correction, on a
@@ -1489,15 +1489,13 @@ const Vector& Integrator::dense_output(double t_at, std::span<const int> unknown
   SubnormalsFlushed flushed;
   Impl& s = *impl_;
   if (const Vector* located = s.remembered_solution(t_at)) return *located;
-  switch (s.row_source(t_at, unknowns)) {
+  const RowRefinement::Row source = s.row_source(t_at, unknowns);
+  switch (source) {
     case RowRefinement::Row::polynomial:
-      s.output_row.resize(s.n);
-      s.interpolate(t_at, unknowns, s.output_row);
-      break;
     case RowRefinement::Row::interpolated:
       s.output_row.resize(s.n);
       s.interpolate(t_at, unknowns, s.output_row);
-      s.output_refinement.interpolate(t_at, unknowns, s.output_row);
+      if (source == RowRefinement::Row::interpolated) s.output_refinement.interpolate(t_at, unknowns, s.output_row);
       break;
     case RowRefinement::Row::solved:
       s.output_row = s.solution_or_polynomial(s.writer(), s.output_statistics, t_at);

@@ -65,6 +65,10 @@ constexpr double kJacobianCjChange = 0.25;  // refactor when cj moved by more th
 // small correction (a junction the matrix was factored at in hard conduction, and now nearly
 // off, hides amps of residual). Past that, the matrix is refactored at the solution.
 constexpr double kConfirmingDrift = 1;
+// Nor along the correction it confirms with (NewtonMatrix::kept_mismatch at half the correction
+// is a matrix twice as stiff along it): boost.cir at rtol 1e-2 ramped its inductor's current to
+// -92 mA through its blocked diode on a matrix the drift kept.
+constexpr double kConfirmingMismatch = 0.5;
 // The first step after a restart is sized so that backward Euler's local error h^2 q''/2 would be
 // half the tolerance (IDA's target), the first step's error test being backward Euler's.
 constexpr double kRestartCurvatureBound = 1;
@@ -349,6 +353,7 @@ struct Integrator::Impl {
   Vector x_predicted, q_predicted, q_derivative_predicted, x_new, q_new, delta, residual;
   double newton_start_fraction = 1;  // how far toward x_predicted Newton starts (predict())
   Vector correction_x, correction_q;
+  Vector kept_mismatch;  // correct()'s scratch
   // The error test's estimate at modified Newton's last iterate, and at the one before it.
   double iterate_error = 0, previous_iterate_error = 0;
   Vector iterate_charge_move;
@@ -564,7 +569,23 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
     // the step breaks the linearization an earlier step's rate was measured on). A matrix that
     // far from the one held may be across a fold from the step's start (damped_newton.hpp):
     // such a solution is refused.
-    const auto confirming = newton.factor(t_new, x_new, p, cj, kConfirmingDrift);
+    auto confirming = newton.factor(t_new, x_new, p, cj, kConfirmingDrift);
+    if (confirming == NewtonMatrix::Outcome::kept) {
+      newton_correction(equation);
+      // Row by row the held matrix can look close where it is far along the correction
+      // (NewtonMatrix::kept_mismatch). Along it, the correction the matrix at the solution would
+      // make is at most correction / (1 - ratio), ratio = mismatch / correction (the Neumann
+      // series): the held matrix confirms where it is not twice as stiff along the correction or
+      // where that bound is within the tolerance. A constant Jacobian's held matrix differs only
+      // in cj, by kJacobianCjChange at most.
+      if (!system.constant_jacobian()) {
+        newton.kept_mismatch(delta, cj_of_matrix, kept_mismatch);
+        const double correction = weighted_max_norm(delta, inverse_weight_x);
+        const double ratio = correction > 0 ? weighted_max_norm(kept_mismatch, inverse_weight_x) / correction : 0;
+        if (ratio >= kConfirmingMismatch && (ratio >= 1 || correction > kNewtonTolerance * (1 - ratio)))
+          confirming = newton.factor(t_new, x_new, p, cj);
+      }
+    }
     if (confirming == NewtonMatrix::Outcome::outside_domain) return NewtonOutcome::outside_domain;
     if (confirming == NewtonMatrix::Outcome::singular) return NewtonOutcome::singular;
     if (confirming == NewtonMatrix::Outcome::ok) {
@@ -572,8 +593,8 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
       if (sign != sign_on_branch(t_new)) return NewtonOutcome::diverged;
       if (newton.factor(t_new, x_new, p, cj) != NewtonMatrix::Outcome::ok) return NewtonOutcome::singular;
       hold_matrix();
+      newton_correction(equation);
     }
-    newton_correction(equation);
     if (weighted_max_norm(delta, inverse_weight_x) <= kNewtonTolerance) break;
     convergence_factor = 20;
     if (m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;

@@ -149,6 +149,17 @@ NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Pred
   return outcome;
 }
 
+void NewtonMatrix::kept_mismatch(const Vector& d, double cj, Vector& out) const {
+  const auto& starts = pattern_.column_starts();
+  const auto& rows = pattern_.row_indices();
+  out.setZero(pattern_.size());
+  for (int column = 0; column < pattern_.size(); ++column)
+    for (int k = starts[column]; k < starts[column + 1]; ++k)
+      out[rows[k]] += (matrix_[k] - (load_.df_dx[k] + cj * load_.dq_dx[k])) * d[column];
+  for (int i : auxiliary_list_) out[i] = 0;
+  lu_.solve(out);
+}
+
 double NewtonMatrix::drift(const Predicates& p, double cj) const {
   if (factored_cj_ == 0 || factored_mode_ != p) return std::numeric_limits<double>::infinity();
   const auto& starts = pattern_.column_starts();

@@ -37,6 +37,13 @@ class NewtonMatrix {
                        double lambda, double cj);
 
   void solve(Vector& b) const { lu_.solve(b); }
+  // After factor() kept the factorization it held: J_held^-1 (J_held - J_now) d into out, for a
+  // correction d made on it (J_now = df/dx + cj dq/dx as that call loaded it), the first-order
+  // difference between d and the correction J_now would make. drift() compares row by row and
+  // misses a change beside a larger entry: a junction factored in hard conduction, now nearly
+  // off, behind its series resistance (RS's 200 S leads the row while the junction's conductance
+  // falls a thousandfold). Along d it shows: half of d's size where J_held is twice as stiff.
+  void kept_mismatch(const Vector& d, double cj, Vector& out) const;
   // The fraction of the step from x to x_next the model accepts (System::newton_step_fraction).
   double step_fraction(const Vector& x, const Vector& x_next) const {
     return system_.newton_step_fraction(x, x_next);

@@ -739,8 +739,8 @@ TEST(Start, ShockleyDiodeOperatingPointSatisfiesItsEquation) {
 // (discontinuous conduction), then rests at v(sw) / ROFF (0.5 uA). Neither the inductor's current
 // nor the switch node can go below zero: no path carries the current back. At rtol 1e-2 the
 // steps reached the turn-off on a matrix factored while the junction conducted amps, 1000 times
-// stiffer than at 1 mA behind its 5 mOhm; Newton on it called -7 mA through the blocked junction
-// converged, and v(sw) fell to -4365 V when the steps' current snapped back.
+// stiffer than near zero current behind its 5 mOhm; Newton on it called -92 mA through the
+// blocked junction converged, and v(sw) fell to -32 kV when the steps' current snapped back.
 TEST(Transient, BoostInDiscontinuousConductionNeverDrivesItsCurrentBackThroughTheDiode) {
   CircuitSpec c;
   c.add("vin", {"in", "0"}, 5.0);

@@ -576,8 +576,8 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
       // (NewtonMatrix::kept_mismatch). Along it, the correction the matrix at the solution would
       // make is at most correction / (1 - ratio), ratio = mismatch / correction (the Neumann
       // series): the held matrix confirms where it is not twice as stiff along the correction or
-      // where that bound is within the tolerance. A constant Jacobian's held matrix differs only
-      // in cj, by kJacobianCjChange at most.
+      // where that bound is within the tolerance. Compared at its own cj: a constant Jacobian's
+      // held matrix is then the matrix at the solution.
       if (!system.constant_jacobian()) {
         newton.kept_mismatch(delta, cj_of_matrix, kept_mismatch);
         const double correction = weighted_max_norm(delta, inverse_weight_x);

@@ -140,7 +140,7 @@ NewtonMatrix::Outcome NewtonMatrix::factor(double t, const Vector& x, const Pred
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
   if (factored_exactly(p, cj)) return keep_within > 0 ? Outcome::kept : Outcome::ok;
   if (keep_within > 0 && drift(p, cj) <= keep_within) return Outcome::kept;
-  for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
+  for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = loaded_entry(k, cj);
   const Outcome outcome = factor_loaded();
   if (outcome == Outcome::ok) {
     factored_mode_ = p;
@@ -155,7 +155,7 @@ void NewtonMatrix::kept_mismatch(const Vector& d, double cj, Vector& out) const 
   out.setZero(pattern_.size());
   for (int column = 0; column < pattern_.size(); ++column)
     for (int k = starts[column]; k < starts[column + 1]; ++k)
-      out[rows[k]] += (matrix_[k] - (load_.df_dx[k] + cj * load_.dq_dx[k])) * d[column];
+      out[rows[k]] += (matrix_[k] - loaded_entry(k, cj)) * d[column];
   for (int i : auxiliary_list_) out[i] = 0;
   lu_.solve(out);
 }
@@ -169,7 +169,7 @@ double NewtonMatrix::drift(const Predicates& p, double cj) const {
   row_scale_.setZero(2 * n);
   for (int column = 0; column < n; ++column)
     for (int k = starts[column]; k < starts[column + 1]; ++k) {
-      const double now = load_.df_dx[k] + cj * load_.dq_dx[k];
+      const double now = loaded_entry(k, cj);
       double& largest = row_scale_[rows[k]];
       largest = std::max(largest, std::abs(now));
       double& difference = row_scale_[n + rows[k]];
@@ -206,7 +206,7 @@ EvalStatus NewtonMatrix::charge_determined(double t, const Vector& x, const Pred
 NewtonMatrix::Outcome NewtonMatrix::factor_shifted(double t, const Vector& x, const Predicates& p,
                                                    double shift, double cj) {
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;
-  for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
+  for (std::size_t k = 0; k < matrix_.size(); ++k) matrix_[k] = loaded_entry(k, cj);
   for (int i = 0; i < pattern_.size(); ++i) matrix_[diagonal_[i]] += shift;
   return factor_loaded();
 }
@@ -225,7 +225,7 @@ NewtonMatrix::Outcome NewtonMatrix::factor_blend(double t, const Vector& x,
   for (std::size_t k = 0; k < matrix_.size(); ++k) {
     load_.df_dx[k] = keep * blend_.df_dx[k] + lambda * load_.df_dx[k];
     load_.dq_dx[k] = keep * blend_.dq_dx[k] + lambda * load_.dq_dx[k];
-    matrix_[k] = load_.df_dx[k] + cj * load_.dq_dx[k];
+    matrix_[k] = loaded_entry(k, cj);
   }
   return factor_loaded();
 }

@@ -90,6 +90,8 @@ class NewtonMatrix {
   // change a hundredfold beside a resistor's and matter nowhere. Below 1 in every row the
   // factorization is nowhere twice as stiff as the matrix now.
   double drift(const Predicates& p, double cj) const;
+  // Entry k of df/dx + cj dq/dx as loaded now.
+  double loaded_entry(std::size_t k, double cj) const { return load_.df_dx[k] + cj * load_.dq_dx[k]; }
 
   System& system_;
   Statistics& statistics_;

@@ -228,14 +228,14 @@ void print_statistics(const padae::Statistics& s, const padae::Statistics& outpu
                       double wall) {
   fmt::print(stderr,
              "{{\"steps\": {}, \"rejected\": {}, \"rejected_error_test\": {}, \"rejected_newton\": {}, "
-             "\"rejected_domain\": {}, \"newton_iterations\": {}, \"jacobians\": {}, "
+             "\"rejected_domain\": {}, \"retaken_at_kinks\": {}, \"newton_iterations\": {}, \"jacobians\": {}, "
              "\"lu_factorizations\": {}, \"events\": {}, \"time_events\": {}, \"jumps\": {}, "
              "\"output_newton_iterations\": {}, \"output_lu_factorizations\": {}, \"unsolved_points\": {}, "
              "\"output_unsolved_points\": {}, \"unknowns\": {}, \"t_end\": {}, \"wall_s\": {:.6f}}}\n",
-             s.steps, s.rejected_error_test + s.rejected_newton + s.rejected_domain, s.rejected_error_test,
-             s.rejected_newton, s.rejected_domain, s.newton_iterations, s.jacobians, s.lu_factorizations, s.events,
-             s.time_events, s.jumps, output.newton_iterations, output.lu_factorizations, s.unsolved_points,
-             output.unsolved_points, unknowns, t_end, wall);
+             s.steps, s.rejected_error_test + s.rejected_newton + s.rejected_domain + s.retaken_at_kinks,
+             s.rejected_error_test, s.rejected_newton, s.rejected_domain, s.retaken_at_kinks, s.newton_iterations,
+             s.jacobians, s.lu_factorizations, s.events, s.time_events, s.jumps, output.newton_iterations,
+             output.lu_factorizations, s.unsolved_points, output.unsolved_points, unknowns, t_end, wall);
 }
 
 // Points inside steps written or used from the polynomial (Statistics::unsolved_points): the

@@ -222,6 +222,11 @@ class Device {
   // by the initial conditions.
   virtual void initial_auxiliaries(Vector& x0) const { (void)x0; }
 
+  // Kinks (padae::System::kinks), written from out[0]: a junction's voltage, whose zero is where
+  // its current turns off.
+  virtual int kink_count() const { return 0; }
+  virtual void kinks(const Vector& x, double* out) const { (void)x, (void)out; }
+
   // Newton's step from x to x_next as the device accepts it (padae::System::newton_step_fraction);
   // asked only of devices that say they limit.
   virtual bool limits_newton_steps() const { return false; }

@@ -156,6 +156,10 @@ Model::Model(CircuitSpec circuit, const RunSettings& settings) : circuit_(std::m
     Device* d = device.get();
     if (d->time_dependent()) time_dependent_devices_.push_back(d);
     if (d->limits_newton_steps()) limiting_devices_.push_back(d);
+    if (d->kink_count() > 0) {
+      kink_devices_.push_back({d, kink_count_});
+      kink_count_ += d->kink_count();
+    }
     constant_jacobian_ = constant_jacobian_ && d->constant_jacobian();
     if (d->predicate_count() == 0) continue;
     d->number_predicates(predicate_count_);
@@ -250,6 +254,10 @@ double Model::resolution_step() const {
   double step = infinity;
   for (const Device* d : time_dependent_devices_) step = std::min(step, d->resolution_step());
   return step;
+}
+
+void Model::kinks(const Vector& x, Vector& out) const {
+  for (const auto& [d, first] : kink_devices_) d->kinks(x, out.data() + first);
 }
 
 double Model::newton_step_fraction(const Vector& x, const Vector& x_next) const {

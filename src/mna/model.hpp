@@ -38,6 +38,8 @@ class Model final : public padae::System {
   bool time_event_rows(double t, std::vector<int>& rows) const override;
   double absolute_tolerance(int unknown, double default_atol) const override;
   double newton_step_fraction(const Vector& x, const Vector& x_next) const override;
+  int kink_count() const override { return kink_count_; }
+  void kinks(const Vector& x, Vector& out) const override;
   // Every device's charges from their values at x (ChargeReference).
   bool measure_charges_from(double t, const Vector& x, const padae::Predicates& p) override;
   // Every device's derivatives depend on the predicates alone. (Holding the .ic voltages changes
@@ -98,12 +100,18 @@ class Model final : public padae::System {
   std::vector<PredicateOwner> predicate_devices_;
   std::vector<const Device*> time_dependent_devices_;
   std::vector<const Device*> limiting_devices_;  // junctions
+  struct KinkOwner {
+    const Device* device;
+    int first_kink;
+  };
+  std::vector<KinkOwner> kink_devices_;
   bool constant_jacobian_ = true;
   padae::Pattern pattern_;
   std::vector<padae::UnknownKind> kinds_;
   std::vector<padae::JumpEntry> jump_entries_;
   std::vector<int> predicate_owners_;  // index in predicate_devices_ of each predicate
   int predicate_count_ = 0;
+  int kink_count_ = 0;
   Tolerances tolerances_;
   ChargeReference charge_reference_;
   padae::Load reference_load_;  // scratch of measure_charges_from()

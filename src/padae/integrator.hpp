@@ -73,6 +73,7 @@ struct Statistics {
   long rejected_error_test = 0;
   long rejected_newton = 0;
   long rejected_domain = 0;        // model evaluations outside the domain (IER)
+  long retaken_at_kinks = 0;       // steps redone at order 1 (System::kinks)
   long residual_evaluations = 0;
   long newton_iterations = 0;
   long jacobians = 0;

@@ -82,6 +82,15 @@ class System {
     return EvalStatus::ok;
   }
 
+  // Kinks: functions of x whose sign change marks where the model, though smooth, turns
+  // abruptly (a junction's current through zero, its conductance falling a millionfold). Steps
+  // cross them; but an unknown that a stiff mode ties to a derivative (a node held only by a
+  // leakage, at L di/dt of the inductor it carries) takes the BDF formula's derivative, and a
+  // formula of order > 1 whose history reaches back across the kink overshoots it. The
+  // integrator retakes such a step at order 1 (Integrator::Impl::kink_spoils_derivative).
+  virtual int kink_count() const { return 0; }
+  virtual void kinks(const Vector& x, Vector& out) const { (void)x, (void)out; }
+
   // Jumps (form (5)). Only called at events, and only when has_jumps().
   // Appends the non-zeros of X(t, x, p) to `out` (which arrives empty).
   virtual bool has_jumps() const { return false; }

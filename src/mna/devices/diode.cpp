@@ -76,6 +76,8 @@ class Diode final : public Device {
     e.df(junction_slots_, conductance + gmin);
     if (charged) e.dq(junction_slots_, capacitance);
   }
+  int kink_count() const override { return 1; }
+  void kinks(const Vector& x, double* out) const override { out[0] = junction_voltage(x); }
   bool limits_newton_steps() const override { return true; }
   double newton_step_fraction(const Vector& x, const Vector& x_next) const override {
     const double v = junction_voltage(x), v_next = junction_voltage(x_next);

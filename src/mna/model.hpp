@@ -90,21 +90,17 @@ class Model final : public padae::System {
   Unknowns unknowns_;
   DeviceArena device_memory_;
   std::vector<DevicePointer> devices_;
-  // The devices asked per step for guards (with their first predicate) and time events
-  // (switches and sources among 1e5 resistors and capacitors), and per Newton iteration for
-  // limits.
-  struct PredicateOwner {
+  // The devices asked per step for guards and kinks (with their first entry in the model's
+  // vector) and time events (switches, junctions and sources among 1e5 resistors and
+  // capacitors), and per Newton iteration for limits.
+  struct NumberedDevice {
     const Device* device;
-    int first_predicate;
+    int first;
   };
-  std::vector<PredicateOwner> predicate_devices_;
+  std::vector<NumberedDevice> predicate_devices_;
+  std::vector<NumberedDevice> kink_devices_;
   std::vector<const Device*> time_dependent_devices_;
   std::vector<const Device*> limiting_devices_;  // junctions
-  struct KinkOwner {
-    const Device* device;
-    int first_kink;
-  };
-  std::vector<KinkOwner> kink_devices_;
   bool constant_jacobian_ = true;
   padae::Pattern pattern_;
   std::vector<padae::UnknownKind> kinds_;

@@ -12,6 +12,7 @@ namespace {
 constexpr int kMaxIterations = 100;          // junctions far from their solution need many
 constexpr double kConvergedNorm = 1e-3;     // Newton correction, in tolerance units
 constexpr double kRefactorRate = 0.1;       // refactor when Newton contracts slower than this
+constexpr double kRefinementStalled = 0.9;  // on an exact matrix, a slower contraction stops
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 // The settling steps' length, relative to the integrator's step: short enough that the
 // extrapolation's O(h^2) error is far below a step's local error, long enough that the steps'
@@ -41,6 +42,7 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     return blended ? newton_.factor_blend(t_eval, x, p_from, p_to, lambda, cj)
                    : newton_.factor(t_eval, x, p_to, cj);
   };
+  const auto exact = [&]() { return !blended && newton_.factored_exactly(p_to, cj); };
   auto evaluate = [&]() {
     if (!blended) return newton_.evaluate(t_eval, x, p_to) == EvalStatus::ok;
     return newton_.factor_blend(t_eval, x, p_from, p_to, lambda, cj) == NewtonMatrix::Outcome::ok;
@@ -91,9 +93,20 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
       // Stalled within the tolerance (floating capacitors), or beyond it within the rounding of
       // the residual's terms: a source's current through a loop of capacitors (index 2) moves
       // by C/h per ulp of their voltages, more than its tolerance in steps this short.
-      if (refactor && stalled(norm, previous_norm) &&
+      // An exact matrix is as fresh as a refactored one.
+      if ((refactor || exact()) && stalled(norm, previous_norm) &&
           (norm <= 1 || newton_.within_roundoff(delta, 1, inverse_weight, 1, x, cj * q_start)))
         return true;
+      // On the exact matrix of affine equations the corrections after the first only refine
+      // against the factorization's rounding, each by about its condition number times eps:
+      // where that is no contraction none follows, and a longer step is better conditioned
+      // (C / h of a 1e-20 s step against an open switch's 1e-12 S: sc_integrator.cir iterated
+      // to overflow, charge_pump.cir for 100 iterations, at each event).
+      if (exact() && rate > kRefinementStalled) {
+        failure_reason_ = "Newton's method stalls in the new mode (its matrix is too ill-conditioned)";
+        failure_unknown_ = worst;
+        return false;
+      }
     }
     refactor = fraction < 1 || rate > kRefactorRate;
     // After a partial step the iteration starts afresh.

@@ -21,6 +21,7 @@ struct Simulation {
   std::vector<Vector> states;
   std::vector<padae::EventRecord> events;
   std::vector<double> dissipated;  // per event
+  padae::Statistics statistics;
 };
 
 // A run to tstop, as the command makes it; `until` (when given) ends it early.
@@ -58,6 +59,7 @@ Simulation simulate(Model& model, double tstop, bool uic, double rtol = 1e-7,
     }
     run.times.push_back(integrator.time()), run.states.push_back(integrator.state());
   }
+  run.statistics = integrator.statistics();
   run.ok = true;
   return run;
 }
@@ -771,6 +773,55 @@ TEST(Transient, BoostInDiscontinuousConductionNeverDrivesItsCurrentBackThroughTh
     EXPECT_GT(lowest_node, -rtol) << "rtol " << rtol;
     EXPECT_GT(lowest_node_switch_off, 5.0 * (1 - 10 * rtol)) << "rtol " << rtol;
   }
+}
+
+TEST(Events, FlyingCapacitorLeftFloatingSettlesOnItsResistiveCommonModeInAFewIterations) {
+  // A charge pump's flying capacitor between its two phases: all four switches off, it floats
+  // on four OFF resistances. Its voltage Vc is held, and KCL on the pair of its nodes gives
+  // (in - top) + (out - top) + (in - bot) + (0 - bot) = 0 over ROFF: top = (in + out / 2 + Vc) / 2.
+  // At the event the vanishing step's matrix (C / h of a 1e-20 s step against 1e-8 S) is too
+  // ill-conditioned to refine the current through the capacitor (Vfly's: C / h per ulp of its
+  // voltage); a longer step's is not. Refining it anyway ran into the iteration limit (100 per
+  // attempt): 138 iterations per event instead of 37.
+  const double vin = 5, roff = 100e6;
+  CircuitSpec c;
+  c.add("vin", {"in", "0"}, vin);
+  c.add("vp1", {"p1", "0"}).waveform = {Waveform::Shape::pulse, {0, 5, 0.5e-6, 10e-9, 10e-9, 9e-6, 20e-6}};
+  c.add("vp2", {"p2", "0"}).waveform = {Waveform::Shape::pulse, {0, 5, 10.5e-6, 10e-9, 10e-9, 9e-6, 20e-6}};
+  auto add_switch = [&](const std::string& name, const std::string& a, const std::string& b, const std::string& drive) {
+    c.add(name, {a, b, drive, "0"}).model = {{"vt", 2.5}, {"vh", 0.0}, {"ron", 1.0}, {"roff", roff}};
+  };
+  add_switch("s1", "in", "top", "p1");
+  add_switch("s2", "bot0", "0", "p1");
+  add_switch("s3", "in", "bot0", "p2");
+  add_switch("s4", "top", "out", "p2");
+  c.add("cfly", {"top", "bot"}, 1e-6);
+  c.add("vfly", {"bot", "bot0"}, 0.0);  // measures its current
+  c.add("cout", {"out", "0"}, 10e-6);
+  c.add("rload", {"out", "0"}, 1e3);
+  Model m(c, {.tstep = 20e-9, .tstop = 200e-6});
+  const Simulation run = simulate(m, 200e-6, true, 1e-3, Tolerances{});
+  ASSERT_TRUE(run.ok) << run.failure;
+  const int top = unknown(m, "v(top)"), bot = unknown(m, "v(bot)"), out = unknown(m, "v(out)");
+  int floating = 0;
+  for (const auto& event : run.events) {
+    const Vector& x = event.x_after;
+    const double held = x[top] - x[bot];
+    EXPECT_NEAR(held, event.x_before[top] - event.x_before[bot], 1e-3 * vin) << "at t = " << event.t;
+    // Every switch off: the drives are both low.
+    const double phase = std::fmod(event.t, 20e-6);
+    if (phase < 10e-6 ? phase > 9.5e-6 : phase > 19.5e-6) {
+      ++floating;
+      const double expected = (vin + x[out] / 2 + held) / 2;
+      EXPECT_NEAR(x[top], expected, 1e-3 * vin) << "at t = " << event.t;
+    }
+  }
+  EXPECT_GE(floating, 18);
+  // Per event: its root location, the vanishing step, the settling steps and the steps between
+  // events.
+  const long per_event = run.statistics.newton_iterations / static_cast<long>(run.events.size());
+  EXPECT_LT(per_event, 60) << run.statistics.newton_iterations << " iterations, " << run.events.size() << " events, "
+                           << run.statistics.steps << " steps";
 }
 
 TEST(Start, ThreePhaseShockleyBridgeFedThroughInductorsFollowsItsLoop) {

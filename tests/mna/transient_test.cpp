@@ -802,6 +802,7 @@ TEST(Events, FlyingCapacitorLeftFloatingSettlesOnItsResistiveCommonModeInAFewIte
   Model m(c, {.tstep = 20e-9, .tstop = 200e-6});
   const Simulation run = simulate(m, 200e-6, true, 1e-3, Tolerances{});
   ASSERT_TRUE(run.ok) << run.failure;
+  ASSERT_FALSE(run.events.empty());
   const int top = unknown(m, "v(top)"), bot = unknown(m, "v(bot)"), out = unknown(m, "v(out)");
   int floating = 0;
   for (const auto& event : run.events) {

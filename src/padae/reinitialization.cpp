@@ -42,7 +42,6 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     return blended ? newton_.factor_blend(t_eval, x, p_from, p_to, lambda, cj)
                    : newton_.factor(t_eval, x, p_to, cj);
   };
-  const auto exact = [&]() { return !blended && newton_.factored_exactly(p_to, cj); };
   auto evaluate = [&]() {
     if (!blended) return newton_.evaluate(t_eval, x, p_to) == EvalStatus::ok;
     return newton_.factor_blend(t_eval, x, p_from, p_to, lambda, cj) == NewtonMatrix::Outcome::ok;
@@ -90,11 +89,12 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     double rate = norm / previous_norm;
     if (fraction == 1) {
       if (norm <= kConvergedNorm) return true;
+      const bool exact_matrix = !blended && newton_.factored_exactly(p_to, cj);
       // Stalled within the tolerance (floating capacitors), or beyond it within the rounding of
       // the residual's terms: a source's current through a loop of capacitors (index 2) moves
       // by C/h per ulp of their voltages, more than its tolerance in steps this short.
       // An exact matrix is as fresh as a refactored one.
-      if ((refactor || exact()) && stalled(norm, previous_norm) &&
+      if ((refactor || exact_matrix) && stalled(norm, previous_norm) &&
           (norm <= 1 || newton_.within_roundoff(delta, 1, inverse_weight, 1, x, cj * q_start)))
         return true;
       // On the exact matrix of affine equations the corrections after the first only refine
@@ -102,7 +102,7 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
       // where that is no contraction none follows, and a longer step is better conditioned
       // (C / h of a 1e-20 s step against an open switch's 1e-12 S: sc_integrator.cir iterated
       // to overflow, charge_pump.cir for 100 iterations, at each event).
-      if (exact() && rate > kRefinementStalled) {
+      if (exact_matrix && rate > kRefinementStalled) {
         failure_reason_ = "Newton's method stalls in the new mode (its matrix is too ill-conditioned)";
         failure_unknown_ = worst;
         return false;

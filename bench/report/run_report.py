@@ -12,8 +12,8 @@ numbers behind them). Sections:
            a tight reference run (cross-checked between the simulators), wall time (median of 3
            runs), steps, switching-instant error.
   scaling  RC ladders with switches from 1e2 to 1e5 unknowns, and the buck converter from 10 to
-           10,000 switching periods: total time, time per step, peak memory (getrusage of the
-           child process).
+           10,000 switching periods: total time, time per step, peak memory (GNU time's
+           maximum resident set of the child process).
   ida      the integrator alone against IDA (bench/ida: padae_ida_compare).
   logical  predicates against the epsilon-smoothed logical function (bench/padae).
 
@@ -69,15 +69,18 @@ class Result:
 GNU_TIME = "/usr/bin/time"
 
 
-def run_process(cmd, cwd=None, timeout=900):
-    """Runs cmd; wall time by the monotonic clock around it. Peak memory: GNU time's %M (the
-    child's maximum resident set) when /usr/bin/time exists; getrusage of a child forked from
-    this Python process would count Python's own pages (the image before exec) as a floor."""
+def run_process(cmd, cwd=None, timeout=900, memory=True):
+    """Runs cmd; wall time by the monotonic clock around it. Peak memory (memory=True): GNU time's
+    %M (the child's maximum resident set) when /usr/bin/time exists; getrusage of a child forked
+    from this Python process would count Python's own pages (the image before exec) as a floor.
+    GNU time's own fork and exec add about 1 ms to the wall time, which is neither simulator's:
+    timed runs pass memory=False."""
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err, \
             tempfile.NamedTemporaryFile(mode="r", suffix=".time") as mem:
-        wrapped = ([GNU_TIME, "-f", "%M", "-o", mem.name] + list(cmd)) if os.path.exists(GNU_TIME) else list(cmd)
+        wrapped = memory and os.path.exists(GNU_TIME)
+        argv = ([GNU_TIME, "-f", "%M", "-o", mem.name] + list(cmd)) if wrapped else list(cmd)
         start = time.monotonic()
-        proc = subprocess.Popen(wrapped, cwd=cwd, stdout=out, stderr=err)
+        proc = subprocess.Popen(argv, cwd=cwd, stdout=out, stderr=err)
         timer = threading.Timer(timeout, proc.kill)
         timer.start()
         try:
@@ -86,8 +89,8 @@ def run_process(cmd, cwd=None, timeout=900):
             timer.cancel()
         seconds = time.monotonic() - start
         proc.returncode = os.waitstatus_to_exitcode(status)
-        peak_kb = usage.ru_maxrss
-        if wrapped[0] == GNU_TIME:
+        peak_kb = usage.ru_maxrss if memory else float("nan")
+        if wrapped:
             mem.seek(0)
             fields = [f for f in mem.read().split() if f.isdigit()]  # "Command exited with ..." first on failure
             peak_kb = int(fields[-1]) if fields else float("nan")
@@ -101,7 +104,8 @@ def tail(text, lines=3):
     return " / ".join(l.strip() for l in text.strip().splitlines()[-lines:])
 
 
-def run_ngspice(netlist, probes, workdir, tag, options="", max_step=None, save=False, read=True, timeout=900):
+def run_ngspice(netlist, probes, workdir, tag, options="", max_step=None, save=False, read=True, timeout=900,
+                memory=True):
     """ngspice -b on a deck spicecmp generates (wrdata of the probes); failures as spicecmp
     detects them. save: a .save card restricts ngspice's stored vectors to the probes."""
     with open(netlist) as f:
@@ -116,7 +120,8 @@ def run_ngspice(netlist, probes, workdir, tag, options="", max_step=None, save=F
         text = "\n".join(lines[:1] + [".save " + " ".join(probes)] + lines[1:]) + "\n"
     with open(deck, "w") as f:
         f.write(sc.ngspice_deck(text, probes, data, options, max_step))
-    res = run_process(["ngspice", "-b", deck], cwd=os.path.dirname(os.path.abspath(netlist)), timeout=timeout)
+    res = run_process(["ngspice", "-b", deck], cwd=os.path.dirname(os.path.abspath(netlist)), timeout=timeout,
+                      memory=memory)
     log = res.stdout + res.stderr
     if res.returncode != 0:
         raise sc.SimulationFailure("ngspice exited with %d: %s" % (res.returncode, sc.scan_ngspice_log(log) or tail(log)))
@@ -142,7 +147,7 @@ def run_ngspice(netlist, probes, workdir, tag, options="", max_step=None, save=F
     return w
 
 
-def run_padsim(padsim, netlist, probes, workdir, tag, extra=(), read=True, timeout=900):
+def run_padsim(padsim, netlist, probes, workdir, tag, extra=(), read=True, timeout=900, memory=True):
     """padsim NETLIST -o CSV --probe ... --stats --quiet [extra]; statistics from its JSON line."""
     with open(netlist) as f:
         tran = sc.parse_tran(f.read())
@@ -151,7 +156,7 @@ def run_padsim(padsim, netlist, probes, workdir, tag, extra=(), read=True, timeo
     if os.path.exists(csv_path):
         os.remove(csv_path)
     cmd = sc.padsim_command(padsim, netlist, csv_path, probes, list(extra) + ["--stats", "--quiet"])
-    res = run_process(cmd, timeout=timeout)
+    res = run_process(cmd, timeout=timeout, memory=memory)
     stats = json_statistics(res.stderr)
     if res.returncode != 0:
         errors = [l for l in res.stderr.splitlines() if "error" in l.lower() and not l.startswith("{")]
@@ -207,13 +212,12 @@ def run_ida_reference(args, netlist, probes, workdir, refine):
 
 
 def repeated(run, repeats):
-    """Runs run(read=True) once and run(read=False) repeats-1 times: the first run's waveform,
-    the median wall time of all."""
+    """Runs run(read=True) once, for the waveform and peak memory, then run(read=False,
+    memory=False) repeats times: the median wall time of those (runs without GNU time)."""
     first = run(read=True)
-    times = [first.seconds]
-    internal = [first.internal_seconds] if first.internal_seconds is not None else []
-    for _ in range(repeats - 1):
-        again = run(read=False)
+    times, internal = [], []
+    for _ in range(repeats):
+        again = run(read=False, memory=False)
         times.append(again.seconds)
         if again.internal_seconds is not None:
             internal.append(again.internal_seconds)
@@ -414,11 +418,10 @@ def work_precision_circuit(args, log, c):
     error_probes = [p.lower() for p in c["error_probes"]]
     # The reference: the closed form, or ngspice at tight settings; then the cross-check.
     try:
-        reference_run = repeated(lambda read: run_ngspice(
-            netlist, probes, wd, "ngspice-tight", c["reference"]["options"], c["reference"]["max_step"], read=read),
-            1)
+        reference_run = run_ngspice(netlist, probes, wd, "ngspice-tight", c["reference"]["options"],
+                                    c["reference"]["max_step"])
         entry["ngspice_tight"] = {"options": c["reference"]["options"], "max_step": c["reference"]["max_step"],
-                                  "seconds": reference_run.median_seconds, "points": len(reference_run.time),
+                                  "seconds": reference_run.seconds, "points": len(reference_run.time),
                                   "steps": reference_run.steps, "why": c["reference"].get("why")}
     except sc.SimulationFailure as e:
         entry["ngspice_tight"] = {"failure": str(e)[:400], "options": c["reference"]["options"]}
@@ -474,7 +477,7 @@ def work_precision_circuit(args, log, c):
             path = with_options(netlist, os.path.join(wd, "padsim-%g.cir" % tol), opts)
             log("wp %s: padsim (%s) rtol %g" % (name, variant, tol))
             try:
-                w = repeated(lambda read: run_padsim(args.padsim, path, probes, wd, "padsim", extra, read=read),
+                w = repeated(lambda **kw: run_padsim(args.padsim, path, probes, wd, "padsim", extra, **kw),
                              args.repeats)
                 entry["runs"].append(run_record("padsim", tol, variant, w,
                                                 safe_measure(c, w, reference, ref_crossings)))
@@ -485,7 +488,7 @@ def work_precision_circuit(args, log, c):
             opts = "reltol=%g vntol=%g" % (tol, rl.vntol_for(tol)) + (" method=gear" if method == "gear" else "")
             log("wp %s: ngspice %s reltol %g" % (name, method, tol))
             try:
-                w = repeated(lambda read: run_ngspice(netlist, probes, wd, "ngspice", opts, read=read), args.repeats)
+                w = repeated(lambda **kw: run_ngspice(netlist, probes, wd, "ngspice", opts, **kw), args.repeats)
                 entry["runs"].append(run_record("ngspice", tol, method, w,
                                                 safe_measure(c, w, reference, ref_crossings)))
             except sc.SimulationFailure as e:
@@ -493,10 +496,9 @@ def work_precision_circuit(args, log, c):
     # The targets' buck measurement: padsim at --rtol 1e-4 with its default absolute tolerances.
     if c.get("periods"):
         try:
-            w = repeated(lambda read: run_padsim(args.padsim, netlist, probes, wd, "padsim-rtol1e-4",
-                                                 ["--rtol", "1e-4"], read=read), 1)
+            w = run_padsim(args.padsim, netlist, probes, wd, "padsim-rtol1e-4", ["--rtol", "1e-4"])
             entry["buck_rtol_1e-4"] = {"steps": w.steps, "steps_per_period": w.steps / c["periods"],
-                                       "seconds": w.median_seconds, "stats": w.stats}
+                                       "seconds": w.seconds, "stats": w.stats}
         except sc.SimulationFailure as e:
             entry["buck_rtol_1e-4"] = {"failure": str(e)[:400]}
     if c.get("event_tolerances"):
@@ -540,15 +542,17 @@ def event_timing(args, c, netlist, tran, wd, log):
 def scaling_measurement(args, sim, path, probe, wd, read_first):
     """One simulator on one scaling netlist: (the first run or None, its row entry). Only quick
     runs are repeated (median of args.repeats); the first reads its waveform when asked."""
-    def run(read):
+    def run(read, memory=True):
         if sim == "padsim":
-            return run_padsim(args.padsim, path, [probe], wd, "padsim", read=read, timeout=args.timeout)
-        return run_ngspice(path, [probe], wd, "ngspice", save=True, read=read, timeout=args.timeout)
+            return run_padsim(args.padsim, path, [probe], wd, "padsim", read=read, timeout=args.timeout,
+                              memory=memory)
+        return run_ngspice(path, [probe], wd, "ngspice", save=True, read=read, timeout=args.timeout,
+                           memory=memory)
     try:
         first = run(read_first)
         times = [first.seconds]
-        if first.seconds < 5:
-            times += [run(False).seconds for _ in range(args.repeats - 1)]
+        if first.seconds < 5:  # timed again without GNU time (the first run measured memory)
+            times = [run(False, memory=False).seconds for _ in range(args.repeats)]
     except sc.SimulationFailure as e:
         return None, {"failure": str(e)[:400]}
     return first, {"seconds": rl.median(times), "runs": len(times), "steps": first.steps,
@@ -1046,7 +1050,8 @@ def write_markdown(results, meta, out_path, img_rel):
              % (" and ".join(c["name"] for c in ida_circuits), IDA_TIGHT,
                 " or ".join("/ %d" % r for r in ida_refines), PADSIM_TIGHT))
     L.append("- **Time.** Wall time of the whole process (parse, operating point, transient, output), median of "
-             "%d runs, one run at a time. *Own time* is what each reports itself: padsim's `--stats` wall_s (whole "
+             "%d runs, one run at a time, after a first run that reads the waveform and measures peak memory under GNU time "
+             "(whose own fork and exec, about 1 ms, are not timed). *Own time* is what each reports itself: padsim's `--stats` wall_s (whole "
              "run), ngspice's `rusage` transient time (the transient analysis only)." % REPEATS)
     L.append("")
     L.append("## 1. Work-precision per circuit")
@@ -1136,7 +1141,7 @@ def write_markdown(results, meta, out_path, img_rel):
     if sd:
         L.append("Both simulators at their default tolerances, one probe written (`--probe v(n1)`; ngspice with "
                  "`.save` of that probe only, so that its memory is not the cost of storing every node). Runs under "
-                 "5 s: median of %d; longer ones: one run." % REPEATS)
+                 "5 s: median of %d more runs without GNU time; longer ones: the one run." % REPEATS)
         L.append("")
         L.append("![scaling in unknowns](%s/scaling_unknowns.png)" % img_rel)
         L.append("")

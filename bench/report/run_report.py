@@ -540,8 +540,9 @@ def event_timing(args, c, netlist, tran, wd, log):
 # Scaling
 
 def scaling_measurement(args, sim, path, probe, wd, read_first):
-    """One simulator on one scaling netlist: (the first run or None, its row entry). Only quick
-    runs are repeated (median of args.repeats); the first reads its waveform when asked."""
+    """One simulator on one scaling netlist: (the first run or None, its row entry). The first run
+    reads its waveform when asked and measures peak memory; quick ones are timed again without GNU
+    time (median of args.repeats)."""
     def run(read, memory=True):
         if sim == "padsim":
             return run_padsim(args.padsim, path, [probe], wd, "padsim", read=read, timeout=args.timeout,
@@ -551,7 +552,7 @@ def scaling_measurement(args, sim, path, probe, wd, read_first):
     try:
         first = run(read_first)
         times = [first.seconds]
-        if first.seconds < 5:  # timed again without GNU time (the first run measured memory)
+        if first.seconds < 5:
             times = [run(False, memory=False).seconds for _ in range(args.repeats)]
     except sc.SimulationFailure as e:
         return None, {"failure": str(e)[:400]}

@@ -60,6 +60,11 @@ constexpr int kMaxNewtonFailures = 10;
 constexpr double kDivergedPastErrorTest = 2;
 constexpr int kStepsBetweenJacobians = 20;
 constexpr double kJacobianCjChange = 0.25;  // refactor when cj moved by more than this fraction
+// A step's modified Newton that took this many corrections converged barely or not at all: its
+// matrix is far from the solution's (a junction turning off moves its conductance a decade per
+// step), and the next attempt refactors rather than spend as many again on it (IDA, too, refreshes
+// its matrix after a slow convergence).
+constexpr int kSlowNewtonIterations = 3;
 // Convergence on a held matrix is confirmed on it only while it is nowhere twice as stiff as the
 // matrix at the solution (NewtonMatrix::drift): on a stiffer matrix a large residual gives a
 // small correction (a junction the matrix was factored at in hard conduction, and now nearly
@@ -355,6 +360,7 @@ struct Integrator::Impl {
   double cj_of_matrix = 0;
   long step_of_matrix = 0;
   double convergence_factor = 20;
+  bool newton_was_slow = false;  // the last attempt's modified Newton (kSlowNewtonIterations)
 
   Vector inverse_weight_x, inverse_weight_q, charge_weight, charge_tolerance;
   Vector peak_magnitude, error_scale;  // largest |x| so far; the magnitude rtol applies to
@@ -860,8 +866,10 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     // 10,000 periods), so its matrix always has the step's cj.
     const double cj_change_allowed = trapezoidal_step() ? 0.0 : kJacobianCjChange;
     bool fresh = !have_matrix || std::abs(cj / cj_of_matrix - 1) > cj_change_allowed ||
-                 statistics.steps >= step_of_matrix + kStepsBetweenJacobians;
+                 statistics.steps >= step_of_matrix + kStepsBetweenJacobians || newton_was_slow;
+    const long iterations_before = statistics.newton_iterations;
     NewtonOutcome correction = correct(t_new, fresh ? Newton::modified_fresh : Newton::modified);
+    newton_was_slow = statistics.newton_iterations - iterations_before >= kSlowNewtonIterations;
     if (correction == NewtonOutcome::diverged && !fresh) correction = correct(t_new, Newton::modified_fresh);
     // A first attempt whose modified Newton diverged past the error test (diverged_past_error_test)
     // goes to the error test from its last iterate, which it fails, instead of to damped Newton;

@@ -612,7 +612,6 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
     if (confirming == NewtonMatrix::Outcome::ok) {
       const int sign = newton.determinant_sign();
       if (sign != sign_on_branch(t_new)) return NewtonOutcome::diverged;
-      if (newton.factor(t_new, x_new, p, cj) != NewtonMatrix::Outcome::ok) return NewtonOutcome::singular;
       hold_matrix();
       newton_correction(equation);
     }

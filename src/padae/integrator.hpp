@@ -157,8 +157,10 @@ class Integrator {
   // directions) are consistent. Falls back to the interpolating polynomial where Newton fails.
   // The interpolating polynomial itself serves for unknowns that are functions of one charge
   // each (the error test controls them), and for others where it is as accurate as that
-  // solution (measured at the step's midpoint); elsewhere interpolants of that solution serve
-  // where checks certify them (row_refinement.hpp).
+  // solution: where the step vouches for it (its predictor and the one before within the
+  // tolerance, and its local error's response in x too), else where a solve at the step's
+  // midpoint confirms it; elsewhere interpolants of that solution serve where checks certify
+  // them (row_refinement.hpp).
   Vector dense_output(double t);
   // The same for the listed unknowns only: the polynomial serves more often, and is evaluated
   // for them alone. The other entries are not computed. Valid until the next call.

@@ -379,8 +379,10 @@ class RcPair : public System {
   Pattern pattern_{3, kEntries};
 };
 
-// Dense output of v_c alone is its polynomial, with no solve at all; v_b's polynomial is first
-// measured against a solve at each step's midpoint. Both are as accurate as the steps.
+// Dense output of v_c alone is its polynomial, with no solve at all. v_b's is too, on steps that
+// vouch for it (a smooth exponential: each step's predictor, and the one before, within v_b's
+// tolerance at the step's end, and the local error's response too); the first steps after the
+// start do not, and their rows are checked by solves. Both are as accurate as the steps.
 TEST(Integrator, DenseOutputOfAnUnknownSetByItsChargeIsThePolynomial) {
   struct Written {
     double worst = 0;  // against the closed form, in tolerances
@@ -412,7 +414,8 @@ TEST(Integrator, DenseOutputOfAnUnknownSetByItsChargeIsThePolynomial) {
   const Written v_c = write(2), v_b = write(1);
   EXPECT_TRUE(v_c.polynomial);
   EXPECT_EQ(v_c.output_iterations, 0);
-  EXPECT_GE(v_b.output_iterations, v_b.steps);
+  EXPECT_GT(v_b.output_iterations, 0);
+  EXPECT_LT(v_b.output_iterations, v_b.steps / 10);
   // Global errors: a few tolerances, as at the steps' ends.
   EXPECT_LT(v_c.worst, 10);
   EXPECT_LT(v_b.worst, 10);
@@ -493,17 +496,20 @@ TEST(Integrator, DenseOutputSolvesWhereNewtonFromThePolynomialFails) {
   EXPECT_LT(worst, 1e-6);
 }
 
-// x' = -x beside 0 = y^3 + y - x, a model that cannot be evaluated at t = blind (set after the
-// steps): a row there has no solution. Its value is the polynomial's, and it is counted, so that
-// the user is told; a row elsewhere in the same step is solved.
+// x' = -x beside 0 = y^3 + y - x - sin(10 t), a model that cannot be evaluated at t = blind
+// (set after the steps): a row there has no solution. Its value is the polynomial's, and it is
+// counted, so that the user is told; a row elsewhere in the same step is solved. The steps
+// follow x; y's sine, which the error test does not see, keeps them from vouching for their
+// polynomial.
 class BlindInstant : public SemiExplicitSystem {
  public:
   BlindInstant() : SemiExplicitSystem({D, A}) {}
   double blind = -1;
+  static double residual(double t, const Vector& z) { return z[1] * z[1] * z[1] + z[1] - z[0] - std::sin(10 * t); }
   EvalStatus equations(double t, const Vector& z, const Predicates&, Vector& out) override {
     if (t == blind) return EvalStatus::outside_domain;
     out[0] = -z[0];
-    out[1] = z[1] * z[1] * z[1] + z[1] - z[0];
+    out[1] = residual(t, z);
     return EvalStatus::ok;
   }
 };
@@ -522,7 +528,7 @@ TEST(Integrator, DenseOutputWithoutASolutionIsThePolynomialAndIsCounted) {
   EXPECT_EQ(integrator.output_statistics().unsolved_points, 1);
   const double quarter = integrator.time() - 0.25 * integrator.step_size();
   const Vector row = integrator.dense_output(quarter);
-  EXPECT_LT(std::abs(row[1] * row[1] * row[1] + row[1] - row[0]), 1e-7);
+  EXPECT_LT(std::abs(BlindInstant::residual(quarter, row)), 1e-7);
   EXPECT_EQ(integrator.output_statistics().unsolved_points, 1);
   EXPECT_EQ(integrator.statistics().unsolved_points, 0);
 }

@@ -626,6 +626,9 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
     if (confirming == NewtonMatrix::Outcome::ok) {
       const int sign = newton.determinant_sign();
       if (sign != sign_on_branch(t_new)) return NewtonOutcome::diverged;
+      // sign_on_branch() factored the matrix at the step's start and loaded f and q there: the
+      // matrix at the solution is factored again, for the correction and for q_new.
+      if (newton.factor(t_new, x_new, p, cj) != NewtonMatrix::Outcome::ok) return NewtonOutcome::singular;
       hold_matrix();
       newton_correction(equation);
     }

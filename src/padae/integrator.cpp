@@ -1425,8 +1425,8 @@ bool Integrator::Impl::charges_determine(std::span<const int> unknowns) {
 // On the report's five switched netlists at rtol 1e-2 ... 1e-8, the rows so written are within
 // 0.071 of the tolerance of the rows the checks gave. The solve waits for the predictors.
 bool Integrator::Impl::step_vouches_for_polynomial(std::span<const int> unknowns) {
-  if (after_restart() || !have_matrix || statistics.steps - steps_at_restart < 2 || previous_correction_x.size() != n)
-    return false;
+  // Two steps since the restart: both corrections are of this history.
+  if (after_restart() || !have_matrix || statistics.steps - steps_at_restart < 2) return false;
   auto within = [&](const Vector& miss) {
     for (int i : unknowns)
       if (!(std::abs(miss[i]) * inverse_weight_x[i] <= 1)) return false;

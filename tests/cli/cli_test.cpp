@@ -113,6 +113,33 @@ TEST_F(Cli, DefaultColumnsAreNodeVoltagesThenSourceAndInductorCurrents) {
   }
 }
 
+// A one-pole op-amp macromodel as a follower: its pole node y moves by microvolts (the output
+// over the gain of 1e5), so a fixed vntol of 1 uV left y, and through the gain the output, at
+// 1.3e-2 V off at any --rtol. The default absolute tolerances follow reltol down instead.
+// Closed form: tc o' + o = K sin(w t), o(0) = 0, K = A0 / (A0 + 1), tc = Rp Cp / (A0 + 1).
+TEST_F(Cli, TighterRtolTightensTheDefaultAbsoluteTolerances) {
+  const std::string netlist =
+      "* follower: one-pole op-amp macromodel (A0 = 1e5, GBW = 10 MHz)\n"
+      "V1 in 0 SIN(0 1 1meg)\n"
+      "E1 x 0 in out 1\n"
+      "Rp x y 1k\n"
+      "Cp y 0 1.5915494309189535u\n"
+      "E2 out 0 y 0 1e5\n"
+      ".tran 10n 3u\n"
+      ".end\n";
+  const Result r = run(write("follower.cir", netlist) + " --rtol 1e-7 --probe 'v(out)'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const double gain = 1e5, tc = 1e3 * 1.5915494309189535e-6 / (gain + 1), k = gain / (gain + 1);
+  const double w = 2 * M_PI * 1e6, wt = w * tc;
+  const Csv csv = parse_csv(r.out);
+  ASSERT_GT(csv.rows.size(), 10u);
+  for (const auto& row : csv.rows) {
+    const double t = row[0];
+    const double expected = k / (1 + wt * wt) * (std::sin(w * t) - wt * std::cos(w * t) + wt * std::exp(-t / tc));
+    EXPECT_NEAR(row[1], expected, 2e-5) << "t = " << t;
+  }
+}
+
 TEST_F(Cli, ProbeSelectsColumnsInLowerCase) {
   const std::string csv_path = path("out.csv");
   const Result r = run(write("rc.cir", rc_netlist) + " -o " + csv_path + " --probe \"V(OUT), i(V1),v(in,out)\"");

@@ -47,12 +47,14 @@ bool apply_tolerances(const netlist::FlatCircuit& flat, const CommandOptions& op
     return *o->number;
   };
   integrator.rtol = options.rtol.value_or(option("reltol", 1e-3));
-  // Unless given, the absolute tolerances keep SPICE's ratio to reltol (abstol 1 pA and vntol
-  // 1 uV at reltol 1e-3), up to SPICE's values: fixed, they would stop a tighter reltol at
-  // unknowns that move by microvolts (an op-amp macromodel's pole node, whose error its gain of
-  // 1e5 carries to the output, stayed 1e-2 of the output's range off at any reltol).
+  // Unless given, vntol keeps SPICE's ratio to reltol (1 uV at reltol 1e-3), up to SPICE's
+  // value: fixed, it stopped a tighter reltol at nodes that move by microvolts (an op-amp
+  // macromodel's pole node, whose error its gain of 1e5 carries to the output, stayed 1e-2 of
+  // the output's range off at any reltol). abstol stays: currents take reltol relative to their
+  // peak (peak_floor below), and 1 pA scaled down too made a forward converter's diode, turning
+  // off into its leakage, fail at reltol 1e-8.
   const double spice_ratio = std::min(1.0, std::max(integrator.rtol, padae::kSmallestRtol) / 1e-3);
-  tolerances.current = options.atol.value_or(option("abstol", 1e-12 * spice_ratio));
+  tolerances.current = options.atol.value_or(option("abstol", 1e-12));
   tolerances.voltage = options.atol.value_or(option("vntol", 1e-6 * spice_ratio));
   if (!positive) return false;
   if (integrator.rtol < padae::kSmallestRtol && !options.quiet)

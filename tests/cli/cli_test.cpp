@@ -115,9 +115,9 @@ TEST_F(Cli, DefaultColumnsAreNodeVoltagesThenSourceAndInductorCurrents) {
 
 // A one-pole op-amp macromodel as a follower: its pole node y moves by microvolts (the output
 // over the gain of 1e5), so a fixed vntol of 1 uV left y, and through the gain the output, at
-// 1.3e-2 V off at any --rtol. The default absolute tolerances follow reltol down instead.
+// 1.3e-2 V off at any --rtol. The default vntol follows reltol down instead.
 // Closed form: tc o' + o = K sin(w t), o(0) = 0, K = A0 / (A0 + 1), tc = Rp Cp / (A0 + 1).
-TEST_F(Cli, TighterRtolTightensTheDefaultAbsoluteTolerances) {
+TEST_F(Cli, TighterRtolTightensTheDefaultVntol) {
   const std::string netlist =
       "* follower: one-pole op-amp macromodel (A0 = 1e5, GBW = 10 MHz)\n"
       "V1 in 0 SIN(0 1 1meg)\n"

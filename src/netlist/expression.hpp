@@ -40,6 +40,7 @@ struct Expression {
                Conditional, Call>
       node;
   SourceRange where;
+  int height = 1;  // of the tree below: the parser bounds it, since every walk of it recurses
 };
 
 }  // namespace netlist

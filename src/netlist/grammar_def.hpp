@@ -11,7 +11,10 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <string>
 #include <string_view>
+#include <type_traits>
+#include <variant>
 
 #include <boost/fusion/include/at_c.hpp>
 #include <boost/spirit/home/x3.hpp>
@@ -99,8 +102,27 @@ inline std::optional<double> number_value(Iterator first, Iterator last) {
   return negative ? -value : value;
 }
 
+// The deepest expression tree the parser builds (Expression::height).
+inline constexpr int max_expression_height = 1000;
+
 inline ExpressionPtr make_expression(decltype(Expression::node) node, SourceRange where) {
-  return std::make_shared<const Expression>(Expression{std::move(node), std::move(where)});
+  auto height_of = [](const ExpressionPtr& e) { return e->height; };
+  const int below = std::visit(
+      [&](const auto& n) {
+        using N = std::decay_t<decltype(n)>;
+        if constexpr (std::is_same_v<N, Unary>) return height_of(n.operand);
+        else if constexpr (std::is_same_v<N, Binary>) return std::max(height_of(n.left), height_of(n.right));
+        else if constexpr (std::is_same_v<N, Conditional>)
+          return std::max({height_of(n.condition), height_of(n.if_true), height_of(n.if_false)});
+        else if constexpr (std::is_same_v<N, Call>) {
+          int deepest = 0;
+          for (const ExpressionPtr& argument : n.arguments) deepest = std::max(deepest, height_of(argument));
+          return deepest;
+        } else
+          return 0;
+      },
+      node);
+  return std::make_shared<const Expression>(Expression{std::move(node), std::move(where), below + 1});
 }
 
 // The range from the start of `first` to the end of `last` when both are on one line.
@@ -147,6 +169,11 @@ struct make_binary_t {
   void operator()(Context& context) const {
     ExpressionPtr left = _val(context);
     ExpressionPtr right = _attr(context);
+    // A chain of operators (a + b + c ...) nests one level per operator; the compilers and
+    // evaluators that walk it recurse, and 10,000 terms overflowed their stack.
+    if (std::max(left->height, right->height) >= max_expression_height)
+      throw CardError{right->where, "expression too deep: more than " + std::to_string(max_expression_height) +
+                                        " operators in a chain (split it into parameters or sources)"};
     SourceRange where = span(left->where, right->where);
     _val(context) = make_expression(Binary{op, std::move(left), std::move(right)}, std::move(where));
   }

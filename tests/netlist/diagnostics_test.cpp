@@ -180,6 +180,22 @@ TEST(Diagnostics, DeepNestingIsAnErrorNotAStackOverflow) {
   ASSERT_EQ(minuses.error_count(), 1);
   EXPECT_EQ(minuses.all()[0].message, "expression nested too deeply");
   EXPECT_EQ(minuses.all()[0].where.begin.column, 208);
+  // A chain a + b + ... nests one level per operator: 10,000 terms overflowed the stack of the
+  // walks that compile and evaluate it. The 1000th '+' (its operand at column 9 + 2 x 1000)
+  // is one too many; 999 are fine.
+  auto chain = [](int operators) {
+    std::string text = "t\nR1 a b {1";
+    for (int k = 0; k < operators; ++k) text += "+1";
+    return text + "}\n";
+  };
+  netlist::Diagnostics long_chain;
+  first_error(chain(10000), long_chain);
+  ASSERT_EQ(long_chain.error_count(), 1);
+  EXPECT_EQ(long_chain.all()[0].message,
+            "expression too deep: more than 1000 operators in a chain (split it into parameters or sources)");
+  EXPECT_EQ(long_chain.all()[0].where.begin.column, 2009);
+  netlist::Diagnostics allowed;
+  EXPECT_EQ(first_error(chain(999), allowed), nullptr) << allowed.to_string();
 }
 
 TEST(Diagnostics, IncludeCycleIsDetected) {

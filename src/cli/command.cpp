@@ -8,10 +8,12 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <regex>
+#include <set>
 #include <span>
 
 #include "cli/output/waveform_writer.hpp"
@@ -20,6 +22,7 @@
 #include "mna/start.hpp"
 #include "mna/structure.hpp"
 #include "netlist/netlist.hpp"
+#include "netlist/source.hpp"
 
 namespace padsim {
 
@@ -283,6 +286,9 @@ class Session {
       return bad_input;
     }
     title_ = flat->title;
+    inputs_ = {options_.netlist};
+    for (const netlist::FlatElement& element : flat->elements)
+      if (element.where.begin.file) inputs_.insert(element.where.begin.file->path);
     if (flat->temperature && *flat->temperature != 27 && !options_.quiet)
       fmt::print(stderr, "padsim: warning: .temp {} ignored: devices are simulated at 27 C\n", *flat->temperature);
     settings_.tstop = options_.tstop.value_or(flat->tran ? flat->tran->stop : 0);
@@ -319,9 +325,54 @@ class Session {
     return success;
   }
 
+  // Why an output may not be written, checked for all before any is opened (truncated), so that
+  // a refusal loses nothing: an output that is an input (the netlist, a file it includes) or
+  // another output, or that cannot be written. Empty when every output may be.
+  std::string refused_output() const {
+    namespace fs = std::filesystem;
+    const std::pair<const char*, std::string> given[] = {
+        {"-o", options_.output == "-" ? "" : options_.output},
+        {"--raw", options_.raw},
+        {"--events", options_.events},
+        {"--plot", options_.plot}};
+    std::vector<std::pair<const char*, std::string>> outputs;
+    for (const auto& output : given)
+      if (!output.second.empty()) outputs.push_back(output);
+    // One file under two names (a link, ../): equivalent() when it exists, else the same
+    // canonical path.
+    auto same_file = [](const std::string& a, const std::string& b) {
+      std::error_code error;
+      if (fs::equivalent(a, b, error)) return true;
+      const fs::path canonical_a = fs::weakly_canonical(a, error);
+      if (error) return false;
+      const fs::path canonical_b = fs::weakly_canonical(b, error);
+      return !error && canonical_a == canonical_b;
+    };
+    for (std::size_t k = 0; k < outputs.size(); ++k) {
+      const auto& [option, path] = outputs[k];
+      for (const std::string& input : inputs_)
+        if (same_file(path, input))
+          return fmt::format("{} '{}' is the netlist's file '{}': refusing to write over it", option, path, input);
+      for (std::size_t j = 0; j < k; ++j)
+        if (same_file(path, outputs[j].second))
+          return fmt::format("{} and {} name the same file '{}'", outputs[j].first, option, path);
+      std::error_code error;
+      if (fs::is_directory(path, error)) return fmt::format("cannot write {} '{}': it is a directory", option, path);
+      const fs::path directory = fs::path(path).parent_path();
+      const std::string must_write = fs::exists(path, error) ? path : directory.empty() ? "." : directory.string();
+      if (::access(must_write.c_str(), W_OK) != 0)
+        return fmt::format("cannot write {} '{}': {}", option, path, std::strerror(errno));
+    }
+    return "";
+  }
+
   // CSV (stdout by default), raw file, event log; the plot reads a CSV file, so with the CSV on
   // stdout a temporary one is written too. Cannot open: exit 2.
   int open_outputs() {
+    if (const std::string refused = refused_output(); !refused.empty()) {
+      print_error(refused);
+      return bad_input;
+    }
     try {
       const std::string output = options_.output.empty() ? "-" : options_.output;
       plot_csv_ = output;
@@ -476,6 +527,7 @@ class Session {
   const CommandOptions& options_;
   const Clock::time_point wall_start_ = Clock::now();
   std::string title_;
+  std::set<std::string> inputs_;  // the netlist and the files it includes
   mna::RunSettings settings_;
   double tstart_ = 0;
   bool uic_ = false;

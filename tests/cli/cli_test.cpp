@@ -368,6 +368,35 @@ TEST_F(Cli, ExpressionControlledSourcesAreBehavioralSources) {
   }
 }
 
+// Every output is checked before any is opened: an output that is the netlist, a file it
+// includes or another output, or that cannot be written, is refused (exit 2) and nothing is lost.
+TEST_F(Cli, OutputsThatWouldLoseAFileAreRefusedBeforeAnyIsWritten) {
+  const std::string part = "R1 in out 1k\nC1 out 0 1u\n";
+  write("part.inc", part);
+  const std::string main_text = "* RC\nV1 in 0 1\n.include part.inc\n.tran 10u 1m\n.end\n";
+  const std::string netlist = write("main.cir", main_text);
+  struct Refusal {
+    std::string arguments, message;
+  };
+  const std::string kept = write("kept.csv", "keep\n");
+  for (const Refusal& refusal : {
+           Refusal{"-o " + netlist, "is the netlist's file"},
+           Refusal{"-o " + path("part.inc"), "is the netlist's file"},
+           Refusal{"-o " + path("sub/../main.cir"), "is the netlist's file"},
+           Refusal{"-o " + path("a.csv") + " --events " + path("a.csv"), "-o and --events name the same file"},
+           Refusal{"-o " + kept + " --raw " + path("missing/x.raw"), "cannot write --raw"},
+           Refusal{"-o " + kept + " --plot " + path("missing/x.png"), "cannot write --plot"},
+           Refusal{"-o " + dir_.string(), "it is a directory"}}) {
+    const Result r = run(netlist + " " + refusal.arguments);
+    EXPECT_EQ(r.exit_code, 2) << refusal.arguments;
+    EXPECT_NE(r.err.find(refusal.message), std::string::npos) << refusal.arguments << ": " << r.err;
+    EXPECT_EQ(read(netlist), main_text);
+    EXPECT_EQ(read(path("part.inc")), part);
+    EXPECT_EQ(read(kept), "keep\n");
+    EXPECT_FALSE(fs::exists(path("a.csv")));
+  }
+}
+
 // A lossless 1 Hz LC tank, 1,000 periods at SPICE's reltol 1e-3: with .options method=trap the
 // amplitude sqrt(v^2 + (L/C) i^2) stays 1; --method gear (BDF) overrides it and damps.
 TEST_F(Cli, TrapezoidalMethodKeepsAnLcTanksAmplitude) {

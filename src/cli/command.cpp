@@ -294,6 +294,18 @@ class Session {
     settings_.tstop = options_.tstop.value_or(flat->tran ? flat->tran->stop : 0);
     settings_.tstep = flat->tran && flat->tran->step > 0 ? flat->tran->step : settings_.tstop / 50;
     tstart_ = flat->tran ? flat->tran->start : 0;
+    if (!(settings_.tstop > tstart_)) {
+      print_error(fmt::format("the stop time {:g} s is not after the .tran start time {:g} s", settings_.tstop, tstart_));
+      return bad_input;
+    }
+    // Far below any circuit's time scale, and where the integrator's time resolution (a few ulps
+    // of the stop time) and the squares of its steps would underflow.
+    constexpr double kShortestStopTime = 1e-100;
+    if (settings_.tstop < kShortestStopTime) {
+      print_error(fmt::format("the stop time {:g} s is below the shortest padsim simulates ({:g} s)", settings_.tstop,
+                              kShortestStopTime));
+      return bad_input;
+    }
     uic_ = flat->tran && flat->tran->use_initial_conditions;
     mna::Tolerances tolerances;
     if (!apply_tolerances(*flat, options_, integrator_options_, tolerances)) return bad_input;
@@ -429,20 +441,14 @@ class Session {
       emit(0, integrator_->state());
 
       while (integrator_->time() < settings_.tstop) {
-        if (const int signal = StopSignals::received()) {
-          if (progress_) progress_->clear();
-          print_error(fmt::format("interrupted by {} at t = {:.9g} s; the waveform up to there is written",
-                                  signal == SIGTERM ? "SIGTERM" : signal == SIGINT ? "SIGINT" : "SIGHUP",
-                                  integrator_->time()));
-          return simulation_failure;
-        }
+        if (StopSignals::received()) return interrupted(integrator_->time());
         const double t_before = integrator_->time();
         const padae::StepOutcome outcome = integrator_->step(settings_.tstop);
         switch (outcome.kind) {
           case padae::StepKind::failed:
             return fail(integrator_->failure());
           case padae::StepKind::event: {
-            emit_inside(t_before, outcome.t);
+            if (!emit_inside(t_before, outcome.t)) return interrupted(last_row_);
             // Two rows at a discontinuity: the state just before and just after it.
             const padae::EventRecord& event = integrator_->last_event();
             if (waveforms_.differ(event.x_before, integrator_->state())) emit(outcome.t, event.x_before);
@@ -453,7 +459,7 @@ class Session {
           case padae::StepKind::accepted:
           case padae::StepKind::time_event:
           case padae::StepKind::stop:
-            emit_inside(t_before, outcome.t);
+            if (!emit_inside(t_before, outcome.t)) return interrupted(last_row_);
             emit(outcome.t, integrator_->state());
             break;
         }
@@ -504,20 +510,31 @@ class Session {
     return fail(failure.t, failure.reason, failure.unknown, fault.empty() ? failure.diagnosis : "in the modes it stopped in: " + fault);
   }
   void emit(double t, const mna::Vector& x) {
-    if (t >= tstart_) waveforms_.row(t, x);
+    if (t < tstart_) return;
+    waveforms_.row(t, x);
+    last_row_ = t;
+  }
+  int interrupted(double t) {
+    if (progress_) progress_->clear();
+    const int signal = StopSignals::received();
+    print_error(fmt::format("interrupted by {} at t = {:.9g} s; the waveform up to there is written",
+                            signal == SIGTERM ? "SIGTERM" : signal == SIGINT ? "SIGINT" : "SIGHUP", t));
+    return simulation_failure;
   }
   // Rows strictly inside the last step (also one that ended at an event), in time order, from
   // its dense output: at the source corners it passed (a corner that cannot bend the solution,
   // a gate drive's, does not end a step, but its waveform keeps the corner) and, with --grid, at
-  // TSTART + k TSTEP.
-  void emit_inside(double t_before, double t_after) {
+  // TSTART + k TSTEP. False where a stop signal came first (a TSTEP far below the steps makes
+  // millions of rows in one step).
+  bool emit_inside(double t_before, double t_after) {
     auto grid_point = [&](long k) {
       return options_.grid ? tstart_ + static_cast<double>(k) * settings_.tstep : mna::infinity;
     };
     while (grid_point(next_grid_) <= t_before) ++next_grid_;
     for (double corner = model_->next_time_event(t_before);;) {
       const double t_row = std::min(corner, grid_point(next_grid_));
-      if (t_row >= t_after) break;
+      if (t_row >= t_after) return true;
+      if (StopSignals::received()) return false;
       emit(t_row, integrator_->dense_output(t_row, waveforms_.unknowns_read()));
       if (t_row == corner) corner = model_->next_time_event(corner);
       if (t_row == grid_point(next_grid_)) ++next_grid_;
@@ -541,6 +558,7 @@ class Session {
   std::unique_ptr<padae::Integrator> integrator_;
   std::unique_ptr<Progress> progress_;
   long next_grid_ = 0;
+  double last_row_ = 0;  // the time of the last row written
 };
 
 }  // namespace

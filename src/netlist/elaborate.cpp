@@ -656,9 +656,23 @@ class Elaborator {
         (option.name.text == "r" ? waveform.repeat_from : waveform.delay) = v;
       }
       if (valid && waveform.kind == WaveformKind::pwl) valid = check_pwl(waveform, spec);
+      if (valid && waveform.kind == WaveformKind::pulse) valid = check_pulse(waveform, spec);
       element.source.waveform = std::move(waveform);
     }
     if (valid) add(std::move(element));
+  }
+
+  // PULSE(V1 V2 TD TR TF PW PER): a negative TR, TF, PW or PER would make ngspice's pulse flat
+  // without a word.
+  bool check_pulse(const Waveform& waveform, const ast::SourceSpec& spec) {
+    static constexpr const char* names[] = {"rise time", "fall time", "width", "period"};
+    for (std::size_t i = 3; i < std::min<std::size_t>(waveform.args.size(), 7); ++i) {
+      if (waveform.args[i] < 0) {
+        diagnostics_.error(spec.args[i]->where, fmt::format("pulse {} must not be negative", names[i - 3]));
+        return false;
+      }
+    }
+    return true;
   }
 
   bool check_pwl(const Waveform& waveform, const ast::SourceSpec& spec) {
@@ -968,6 +982,10 @@ class Elaborator {
     }
     if (!(*stop > *start)) {
       diagnostics_.error(card.stop->where, ".tran needs a stop time after the start time");
+      return;
+    }
+    if (max_step && *max_step < 0) {  // 0: the default, as in ngspice
+      diagnostics_.error((*card.max_step)->where, ".tran needs a positive maximum step");
       return;
     }
     if (circuit_.tran)

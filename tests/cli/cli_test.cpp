@@ -368,6 +368,19 @@ TEST_F(Cli, ExpressionControlledSourcesAreBehavioralSources) {
   }
 }
 
+// A stop time that --tstop puts before the .tran start, or far below any circuit's time scale
+// (where the integrator's time resolution would underflow; 1e-300 s hung), is refused.
+TEST_F(Cli, StopTimesOutsideTheRunAreRefused) {
+  const std::string netlist = write("rc.cir", "* RC\nV1 in 0 1\nR1 in out 1k\nC1 out 0 1u\n.tran 10u 5m 2m\n.end\n");
+  const Result before_start = run(netlist + " --tstop 1m");
+  EXPECT_EQ(before_start.exit_code, 2);
+  EXPECT_NE(before_start.err.find("the stop time 0.001 s is not after the .tran start time 0.002 s"), std::string::npos)
+      << before_start.err;
+  const Result tiny = run(write("rc0.cir", "* RC\nV1 in 0 1\nR1 in out 1k\nC1 out 0 1u\n.tran 1e-302 1e-300\n.end\n"));
+  EXPECT_EQ(tiny.exit_code, 2);
+  EXPECT_NE(tiny.err.find("below the shortest padsim simulates"), std::string::npos) << tiny.err;
+}
+
 // Every output is checked before any is opened: an output that is the netlist, a file it
 // includes or another output, or that cannot be written, is refused (exit 2) and nothing is lost.
 TEST_F(Cli, OutputsThatWouldLoseAFileAreRefusedBeforeAnyIsWritten) {

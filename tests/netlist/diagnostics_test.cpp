@@ -68,6 +68,7 @@ const Malformed malformed[] = {
     // elaboration
     {"t\n.tran 0 1u\n", 2, 7, ".tran needs a positive time step"},
     {"t\n.tran 1n 0\n", 2, 10, ".tran needs a stop time after the start time"},
+    {"t\n.tran 1n 1u 0 -1n\n", 2, 15, ".tran needs a positive maximum step"},
     {"t\n.ac dec 10 1 1k\n", 2, 1, ".ac is not supported: padsim runs transient analysis (.tran) only"},
     {"t\nD1 a b dmod\n", 2, 8, "model 'dmod' is not defined"},
     {"t\n.model sm sw(vt=1)\nD1 a b sm\n", 3, 8, "model 'sm' is a sw model; a diode needs a d model"},
@@ -89,6 +90,8 @@ const Malformed malformed[] = {
     {"t\nR1 a b 1 m=2\n", 2, 10, "unknown parameter 'm' for resistor r1"},
     {"t\nD1 a 0 dm 2 area=3\n.model dm d\n", 2, 13, "diode d1: the area is given twice"},
     {"t\nV1 a 0 pwl(0 0 2 1 1 0)\n", 2, 20, "pwl times must not decrease"},
+    {"t\nV1 a 0 pulse(0 1 0 1n 1n -1u 2u)\n", 2, 26, "pulse width must not be negative"},
+    {"t\nV1 a 0 pulse(0 1 0 1n 1n 1u -2u)\n", 2, 29, "pulse period must not be negative"},
     {"t\nV1 a 0 pwl(0 0 1 1) r=0.5\n", 2, 23, "pwl r= must be one of the time points"},
 };
 

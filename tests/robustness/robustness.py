@@ -1023,11 +1023,11 @@ def case_tolerance_below_double_precision(c):
     expect_relaxation_to_tstop(c, r)
 
 
-def kill_case(c, sig):
+def kill_case(c, sig, extra=()):
     csv_path = c.workdir / "killed.csv"
     if csv_path.exists():
         csv_path.unlink()
-    command = [c.padsim, str(c.netlist), "-o", str(csv_path), "--stats", "-q"]
+    command = [c.padsim, str(c.netlist), "-o", str(csv_path), "--stats", "-q"] + list(extra)
     c.commands.append(display_command(command, c.workdir, None) + f"  # {sig.name} once the CSV has rows")
     # SIGALRM ends the run after 60 s whatever happens to this script: no run outlives the test.
     p = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, encoding="utf-8",
@@ -1089,6 +1089,10 @@ def kill_case(c, sig):
 
 def case_killed_sigterm(c):
     kill_case(c, signal.SIGTERM)
+
+
+def case_killed_sigterm_grid(c):
+    kill_case(c, signal.SIGTERM, ["--grid"])
 
 
 def case_killed_sigkill(c):
@@ -1169,6 +1173,7 @@ NUMERIC_CASES = [
     ("faults", "tolerance_below_roundoff_operating_point", case_tolerance_below_roundoff_operating_point),
     ("faults", "tolerance_below_double_precision", case_tolerance_below_double_precision),
     ("faults", "killed_sigterm", case_killed_sigterm),
+    ("faults", "killed_sigterm_grid", case_killed_sigterm_grid),
     ("faults", "killed_sigkill", case_killed_sigkill),
     ("faults", "power_at_zero", case_power_at_zero),
 ]

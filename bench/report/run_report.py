@@ -46,7 +46,6 @@ PADSIM_TOLERANCES = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9]
 NGSPICE_TOLERANCES = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7]
 PADSIM_TIGHT = 1e-10          # padsim's cross-check run of the reference
 IDA_TIGHT = 1e-10             # SUNDIALS IDA's reference run on padsim's equations (bench/ida)
-PADSIM_DEFAULT_RTOL = 1e-6    # padsim's reltol when the netlist gives none (src/cli/command.cpp)
 # The scaling section's tolerance for both simulators: ngspice's default reltol (padsim's default
 # would take about five times the steps on the smooth RC ladders).
 SCALING_RTOL = 1e-3
@@ -864,7 +863,7 @@ def targets(results):
         parts.append("%s: error x%s, time x%s" % (name, rl.fmt(er), rl.fmt(tr)))
     rows.append(("At default settings: padsim's error <= 0.1 x ngspice's, at no more time",
                  "padsim `--grid` on the netlist as written (its default reltol %g) / ngspice at reltol 1e-3 with "
-                 "trap (its defaults): " % PADSIM_DEFAULT_RTOL + "; ".join(parts), met and bool(parts)))
+                 "trap (its defaults): " % sc.PADSIM_DEFAULT_RTOL + "; ".join(parts), met and bool(parts)))
     # 2. Buck steps per period.
     b = wp.get("buck_1000", {}).get("buck_rtol_1e-4")
     if b and "steps_per_period" in b:
@@ -1137,7 +1136,7 @@ def write_markdown(results, meta, out_path, img_rel):
         d = e.get("padsim_default")
         if d:
             L.append("padsim at its defaults (the netlist as written: reltol %g, `--grid`): %s" % (
-                PADSIM_DEFAULT_RTOL, "FAILED %s" % d["failure"] if not d["ok"] else
+                sc.PADSIM_DEFAULT_RTOL, "FAILED %s" % d["failure"] if not d["ok"] else
                 "max error %s, RMS error %s, %.4f s, %d steps" % (rl.fmt(d["error_max"]), rl.fmt(d["error_rms"]),
                                                                  d["seconds"], d["steps"])))
             L.append("")
@@ -1165,7 +1164,7 @@ def write_markdown(results, meta, out_path, img_rel):
                  "takes about five times the steps on the ladders), one probe written (`--probe v(n1)`; ngspice with "
                  "`.save` of that probe only, so that its memory is not the cost of storing every node). Runs under "
                  "5 s: median of %d more runs without GNU time; longer ones: the one run."
-                 % (SCALING_RTOL, SCALING_RTOL, PADSIM_DEFAULT_RTOL, REPEATS))
+                 % (SCALING_RTOL, SCALING_RTOL, sc.PADSIM_DEFAULT_RTOL, REPEATS))
         L.append("")
         L.append("![scaling in unknowns](%s/scaling_unknowns.png)" % img_rel)
         L.append("")

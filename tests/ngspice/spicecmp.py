@@ -154,6 +154,8 @@ def replace_tran(text, tran):
 # Newton tolerances follow reltol down (vntol 1e-9 V, abstol 1e-14 A) so that reltol governs;
 # gear, because trapezoidal rings after a switch. The maximum step is set per case (run_regression).
 TIGHT_OPTIONS = "reltol=1e-7 abstol=1e-14 vntol=1e-9 method=gear"
+# padsim's reltol when neither the netlist nor --rtol gives one (src/cli/command.cpp, kDefaultRtol).
+PADSIM_DEFAULT_RTOL = 1e-6
 
 
 def ngspice_deck(netlist_text, probes, data_path, options="", max_step=None, accounting=True):

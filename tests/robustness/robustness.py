@@ -35,7 +35,7 @@ import spicecmp  # noqa: E402  (ngspice runs: the references of a few cases)
 REPO = HERE.parent.parent
 CASES_DIR = HERE / "cases"
 BAD_DIR = HERE / "invalid"  # the netlist corpus test skips directories named invalid
-DEFAULT_RTOL = 1e-6  # padsim's reltol when neither the netlist nor --rtol gives one (src/cli/command.cpp)
+DEFAULT_RTOL = spicecmp.PADSIM_DEFAULT_RTOL
 
 # Cases padsim fails today, with the reason (shown in CTest as disabled and in the report).
 KNOWN_FAILURES = {}

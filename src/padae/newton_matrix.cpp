@@ -10,6 +10,9 @@ namespace padae {
 
 namespace {
 
+// A direction is resolved where rounding makes at most this fraction of a correction along it.
+constexpr double kResolvedRounding = 1e-2;
+
 void size_load(Load& load, int n, int nonzeros) {
   load.f.setZero(n);
   load.q.setZero(n);
@@ -53,7 +56,7 @@ NewtonMatrix::NewtonMatrix(System& system, Statistics& statistics, const Vector&
   const int n = system.size();
   size_load(load_, n, pattern_.nonzeros());
   matrix_.resize(static_cast<std::size_t>(pattern_.nonzeros()));
-  abs_dq_dx_.assign(matrix_.size(), 0.0);
+  dq_dx_.assign(matrix_.size(), 0.0);
   auxiliary_.resize(static_cast<std::size_t>(n));
   diagonal_.resize(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
@@ -232,7 +235,7 @@ NewtonMatrix::Outcome NewtonMatrix::factor_blend(double t, const Vector& x,
 
 NewtonMatrix::Outcome NewtonMatrix::factor_loaded() {
   factored_cj_ = 0;
-  for (std::size_t k = 0; k < matrix_.size(); ++k) abs_dq_dx_[k] = std::abs(load_.dq_dx[k]);
+  dq_dx_ = load_.dq_dx;
   // Auxiliary unknowns are held: their rows become x_i = held value.
   if (!auxiliary_list_.empty()) {
     const auto& starts = pattern_.column_starts();
@@ -248,24 +251,51 @@ NewtonMatrix::Outcome NewtonMatrix::factor_loaded() {
 
 bool NewtonMatrix::within_roundoff(const Vector& v, double tolerances, const Vector& inverse_weight,
                                    double roundoffs, const Vector& x, const Vector& other_terms) const {
-  roundoff_ = other_terms.cwiseAbs();
-  add_absolute_product(matrix_, x, roundoff_);
+  rounding_through_inverse(x, other_terms, roundoff_);
+  // A differential unknown's correction beyond its tolerance, to be explained by rounding.
+  auto charge_slack = [&](Eigen::Index i) {
+    return std::abs(v[i]) > tolerances / inverse_weight[i] && system_.kind(static_cast<int>(i)) == UnknownKind::differential;
+  };
+  bool any_charge_slack = false;
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    if (std::abs(v[i]) > tolerances / inverse_weight[i] + (auxiliary_[i] ? 0.0 : roundoffs * std::abs(roundoff_[i])))
+      return false;
+    any_charge_slack = any_charge_slack || charge_slack(i);
+  }
+  if (!any_charge_slack) return true;
+  // The charges v moves, against the charges its unknowns' tolerances represent.
+  const auto& starts = pattern_.column_starts();
+  const auto& rows = pattern_.row_indices();
+  charge_move_.setZero(pattern_.size());
+  for (int column = 0; column < pattern_.size(); ++column)
+    for (int k = starts[column]; k < starts[column + 1]; ++k) charge_move_[rows[k]] += dq_dx_[k] * v[column];
+  Vector charge_tolerance;
+  charge_scale(tolerances * inverse_weight.cwiseInverse(), charge_tolerance);
+  if ((charge_move_.cwiseAbs().array() > charge_tolerance.array()).any()) return false;
+  // The direction must still be resolved: the rounding of a correction of the rounding's own
+  // size is a small part of it. Past that (eps C / h above the conductance that ties the
+  // direction down) no value along it is better than another, and it would drift.
+  Vector rounding_of_rounding;
+  rounding_through_inverse(roundoff_, Vector::Zero(roundoff_.size()), rounding_of_rounding);
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (charge_slack(i) && std::abs(rounding_of_rounding[i]) > kResolvedRounding * std::abs(roundoff_[i])) return false;
+  return true;
+}
+
+void NewtonMatrix::rounding_through_inverse(const Vector& x, const Vector& other_terms, Vector& out) const {
+  out = other_terms.cwiseAbs();
+  add_absolute_product(matrix_, x, out);
   for (int row = 0; row < pattern_.size(); ++row) {
     // Signs that do not cancel systematically.
     const bool negative = scrambled(row) & 0x8000u;
-    roundoff_[row] *= auxiliary_[row] ? 0.0 : (negative ? -1.0 : 1.0) * std::numeric_limits<double>::epsilon();
+    out[row] *= auxiliary_[row] ? 0.0 : (negative ? -1.0 : 1.0) * std::numeric_limits<double>::epsilon();
   }
-  lu_.solve(roundoff_);
-  for (Eigen::Index i = 0; i < v.size(); ++i) {
-    const double allowed = system_.kind(static_cast<int>(i)) == UnknownKind::algebraic ? roundoffs * std::abs(roundoff_[i]) : 0.0;
-    if (std::abs(v[i]) > tolerances / inverse_weight[i] + allowed) return false;
-  }
-  return true;
+  lu_.solve(out);
 }
 
 void NewtonMatrix::charge_scale(const Vector& scale, Vector& out) const {
   out.setZero(pattern_.size());
-  add_absolute_product(abs_dq_dx_, scale, out);
+  add_absolute_product(dq_dx_, scale, out);
 }
 
 void NewtonMatrix::add_absolute_product(const std::vector<double>& values, const Vector& v, Vector& out) const {

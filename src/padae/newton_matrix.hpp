@@ -62,7 +62,10 @@ class NewtonMatrix {
   // the residual's terms, eps (|J| |x| + |other_terms|) row by row (other_terms: what else the
   // residual sums, c q_anchor and q'), with signs that do not cancel systematically, through
   // J^-1. A correction within it is the residual's noise: x solves the equations to working
-  // precision.
+  // precision. Differential unknowns get that slack only where it moves no charge (dq/dx v
+  // within the charges' tolerances) and where rounding still resolves the direction: along
+  // the common mode of capacitors between nodes that only a large resistance ties down (a
+  // floating secondary held by 1 MOhm: C/h swamps its 1 uS in every row of the matrix).
   bool within_roundoff(const Vector& v, double tolerances, const Vector& inverse_weight, double roundoffs,
                        const Vector& x, const Vector& other_terms) const;
   // Whether the factorization held is of df/dx + cj dq/dx in mode p exactly: a constant
@@ -81,6 +84,9 @@ class NewtonMatrix {
   EvalStatus finite_difference_derivatives(double t, const Vector& x, const Predicates& p,
                                            Load& out);
   Outcome factor_loaded();
+  // J^-1 eps (|J| |x| + |other_terms|), row signs scrambled: what rounding makes of a Newton
+  // correction at x in the last factorization.
+  void rounding_through_inverse(const Vector& x, const Vector& other_terms, Vector& out) const;
   // out += |A| |v|, A the matrix with these values on the pattern.
   void add_absolute_product(const std::vector<double>& values, const Vector& v, Vector& out) const;
   // The factorization's drift from df/dx + cj dq/dx as loaded now: the largest, over the rows,
@@ -101,9 +107,10 @@ class NewtonMatrix {
   Load blend_;            // second load for the continuation blend
   Load perturbed_;        // scratch for finite differences
   std::vector<double> matrix_;
-  std::vector<double> abs_dq_dx_;  // |dq/dx| of the last factorization
+  std::vector<double> dq_dx_;      // dq/dx of the last factorization
   mutable Vector row_scale_;       // scratch of drift()
   mutable Vector roundoff_;        // scratch of within_roundoff()
+  mutable Vector charge_move_;     // scratch of within_roundoff()
   std::vector<char> auxiliary_;
   std::vector<int> auxiliary_list_;
   std::vector<int> diagonal_;      // value index of (i, i)

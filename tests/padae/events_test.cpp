@@ -574,7 +574,7 @@ TEST(Events, ASourceInALoopOfCapacitorsFollowsTheClosedFormAtTightTolerances) {
 // In a step of h = 1 ps, one ulp of v_m (190 V) is C1 / h ulp = 2.8e-7 A of the source's current
 // i = -8.3 A, 34 times its tolerance at rtol 1e-9. A correction of that size in i is the residual's
 // rounding; one a thousand times larger is not, nor is a correction beyond the tolerance in a
-// differential unknown (the state is always resolved to its tolerance).
+// differential unknown that moves the charges (they are always resolved to their tolerance).
 TEST(NewtonMatrix, RoundOffAllowanceCoversAnIndexTwoCurrentsUlpNoiseOnly) {
   SplitBus model;
   Statistics statistics;
@@ -596,6 +596,59 @@ TEST(NewtonMatrix, RoundOffAllowanceCoversAnIndexTwoCurrentsUlpNoiseOnly) {
   EXPECT_FALSE(within(3, 1e3 * ulp_current));
   EXPECT_TRUE(within(1, 0.9 / inverse_weight[1]));
   EXPECT_FALSE(within(1, 2 / inverse_weight[1]));
+}
+
+// A capacitor C between nodes a and b, each tied to ground by G only (a floating secondary's
+// 1 MOhm): the pair's common mode is algebraic, and in a short step C / h swamps G in both rows.
+// Rounding then leaves the common mode resolved to about eps (C / h) |v| / G, not to the
+// tolerance: a correction of that size along it moves no charge and is the residual's noise,
+// while one across the capacitor is not. Where eps C / h exceeds G nothing resolves the
+// common mode any more, and no correction along it is noise.
+class FloatingCapacitor : public System {
+ public:
+  static constexpr double kC = 1e-6, kG = 1e-6, kI = 1e-3;
+  int size() const override { return 2; }
+  UnknownKind kind(int) const override { return D; }
+  const Pattern& pattern() const override { return pattern_; }
+  EvalStatus load(double, const Vector& x, const Predicates&, Load& out) override {
+    out.q[0] = kC * (x[0] - x[1]);
+    out.q[1] = -out.q[0];
+    out.f[0] = kG * x[0] - kI;
+    out.f[1] = kG * x[1];
+    if (!out.jacobian_requested) return EvalStatus::ok;
+    auto at = [&](int row, int column) { return static_cast<std::size_t>(pattern_.index(row, column)); };
+    out.dq_dx[at(0, 0)] = out.dq_dx[at(1, 1)] = kC;
+    out.dq_dx[at(0, 1)] = out.dq_dx[at(1, 0)] = -kC;
+    out.df_dx[at(0, 0)] = out.df_dx[at(1, 1)] = kG;
+    return EvalStatus::ok;
+  }
+
+ private:
+  static constexpr std::pair<int, int> kEntries[] = {{0, 0}, {0, 1}, {1, 0}, {1, 1}};
+  Pattern pattern_{2, kEntries};
+};
+
+TEST(NewtonMatrix, RoundOffAllowanceCoversAFloatingCapacitorsCommonModeWhereRoundingResolvesIt) {
+  FloatingCapacitor model;
+  Statistics statistics;
+  NewtonMatrix newton(model, statistics, Vector::Constant(2, 1e-9));
+  const Vector x{{500, 400}};
+  const double rtol = 1e-6;
+  const Vector inverse_weight = (rtol * x.cwiseAbs() + Vector::Constant(2, 1e-9)).cwiseInverse();
+  const double tolerance = 1 / inverse_weight[1];  // 4e-4 V
+  auto within = [&](double cj, double common, double across) {
+    EXPECT_EQ(newton.factor(0, x, {}, cj), NewtonMatrix::Outcome::ok);
+    const Vector delta{{common + across / 2, common - across / 2}};
+    return newton.within_roundoff(delta, 1, inverse_weight, 1, x, Vector::Zero(2));
+  };
+  // h = 1 ns: eps (C / h) |v| / G = 2e-4 V, within the tolerance.
+  EXPECT_FALSE(within(1e9, 3 * tolerance, 0));
+  // h = 1 ps: 0.2 V, 500 tolerances.
+  EXPECT_TRUE(within(1e12, 0.1, 0));
+  EXPECT_FALSE(within(1e12, 1, 0));
+  EXPECT_FALSE(within(1e12, 0, 3 * tolerance));
+  // h = 1 fs: eps C / h = 0.2 G.
+  EXPECT_FALSE(within(1e15, 3 * tolerance, 0));
 }
 
 }  // namespace

@@ -381,6 +381,9 @@ struct Integrator::Impl {
   Vector correction_x, correction_q;
   Vector previous_correction_x;  // the step before's correction_x (step_vouches_for_polynomial)
   long steps_at_restart = 0;     // statistics.steps at the last restart
+  // From the start of a run to its first event: the step the motion's curvature alone allows,
+  // tried once should Newton fail on IDA's shorter steps (restart()).
+  double first_step_by_curvature = 0;
   Vector kept_mismatch;  // correct()'s scratch
   // The error test's estimate at modified Newton's last iterate, and at the one before it.
   double iterate_error = 0, previous_iterate_error = 0;
@@ -904,6 +907,17 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       else ++statistics.rejected_newton;
       weighted_max_norm(delta, inverse_weight_x, &blamed);
       if (correction == NewtonOutcome::singular) blamed = newton.singular_column();
+      // IDA's first steps can be so short that rounding loses what ties a node down: 280 V into
+      // 50 uH, its current held to 1 pA, gave 2e-19 s, where C / h swamps in every row the 1 uS
+      // that holds the common mode of a diode island, and Newton failed however small the step
+      // (or half the time, for ever). The step the motion's curvature allows (settle()'s q'')
+      // is tried instead, once.
+      if (first_step_by_curvature > h) {
+        h = first_step_by_curvature;
+        first_step_by_curvature = 0;
+        have_matrix = false;
+        continue;
+      }
       if (++newton_failures >= kMaxNewtonFailures || h <= minimum_step()) {
         std::string why = correction == NewtonOutcome::singular
                               ? "the Newton matrix is singular (column " + std::to_string(newton.singular_column()) + ")"
@@ -1530,16 +1544,18 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   if (kink_count > 0) system.kinks(x, kinks_now);
   update_weights();
   double h_new = h > 0 ? std::max(h, h_planned) : (options.initial_step > 0 ? options.initial_step : 1e-3 * options.time_scale);
-  if (h <= 0 && options.initial_step <= 0) {
-    // IDA's initial step: the first-order change over the step is at most half a tolerance.
-    double rate = weighted_norm(consistent.q_derivative, inverse_weight_q, options.norm);
-    if (h_new * rate > 0.5) h_new = 0.5 / rate;
-  }
   // Order 1's local error, h^2 q'' / 2, bounded (unless the caller chose the initial step):
   // the new motion's curvature sets the first step, the previous step only caps it.
   double curvature = weighted_norm(consistent.q_second_derivative, inverse_weight_q, options.norm);
   if ((h > 0 || options.initial_step <= 0) && h_new * h_new * curvature > kRestartCurvatureBound)
     h_new = std::sqrt(kRestartCurvatureBound / curvature);
+  first_step_by_curvature = 0;
+  if (h <= 0 && options.initial_step <= 0) {
+    first_step_by_curvature = h_new;
+    // IDA's initial step: the first-order change over the step is at most half a tolerance.
+    double rate = weighted_norm(consistent.q_derivative, inverse_weight_q, options.norm);
+    if (h_new * rate > 0.5) h_new = 0.5 / rate;
+  }
   if (options.max_step > 0) h_new = std::min(h_new, options.max_step);
   h_new = std::max(h_new, minimum_step());
   h = h_new;

@@ -775,6 +775,37 @@ TEST(Transient, BoostInDiscontinuousConductionNeverDrivesItsCurrentBackThroughTh
   }
 }
 
+// -281 V steps through 50 uH into a diode pair and a capacitor that float on 1 MOhm (uic, one
+// leg of a bridge rectifier). The inductor's current, held to 1 pA, made IDA's first step 2e-19
+// s, where C / h swamps the 1 uS holding the island's common mode in every row of the matrix:
+// Newton failed however small the step (RS = 0) or half the time, for ever (RS = 5 mOhm), at
+// every rtol. Within picoseconds the current settles (L / R = 50 ps) to what Rref carries
+// through D5: v(neg) = -281 + n VT ln(1 + (-v(neg) / Rref) / IS), ngspice's -280.33467 V. D2
+// blocks, so the capacitor only drifts by IS t / C (1e-8 V at 1 ms).
+TEST(Start, DiodeIslandOnOneMegohmStartsFromInitialConditionsAtEveryTolerance) {
+  const double is = 1e-11, n = 1.5, rref = 1e6;
+  const double vte = n * 1.38064852e-23 * 300.15 / 1.6021766208e-19;  // ngspice's constants
+  double settled = -280;
+  for (int i = 0; i < 50; ++i) settled = -281 + vte * std::log1p(-settled / (rref * is));
+  for (double rs : {0.0, 5e-3}) {
+    CircuitSpec c;
+    c.add("vb", {"b0", "0"}, -281.0);
+    c.add("lb", {"b0", "b"}, 50e-6);
+    c.add("d2", {"b", "pos"}).model = {{"is", is}, {"n", n}, {"rs", rs}};
+    c.add("d5", {"neg", "b"}).model = {{"is", is}, {"n", n}, {"rs", rs}};
+    c.add("rref", {"neg", "0"}, rref);
+    c.add("cl", {"pos", "neg"}, 1e-6);
+    for (double rtol : {1e-3, 1e-6, 1e-8}) {
+      Model m(c, {.tstep = 10e-6, .tstop = 1e-3});
+      const Simulation run = simulate(m, 1e-3, true, rtol);
+      ASSERT_TRUE(run.ok) << "rs " << rs << ", rtol " << rtol << ": " << run.failure;
+      const Vector& end = run.states.back();
+      EXPECT_NEAR(end[unknown(m, "v(neg)")], settled, 1e-5) << "rs " << rs << ", rtol " << rtol;
+      EXPECT_NEAR(end[unknown(m, "v(pos)")] - end[unknown(m, "v(neg)")], 0, 1e-7) << "rs " << rs << ", rtol " << rtol;
+    }
+  }
+}
+
 TEST(Events, FlyingCapacitorLeftFloatingSettlesOnItsResistiveCommonModeInAFewIterations) {
   // A charge pump's flying capacitor between its two phases: all four switches off, it floats
   // on four OFF resistances. Its voltage Vc is held, and KCL on the pair of its nodes gives

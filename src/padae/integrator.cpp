@@ -381,8 +381,8 @@ struct Integrator::Impl {
   Vector correction_x, correction_q;
   Vector previous_correction_x;  // the step before's correction_x (step_vouches_for_polynomial)
   long steps_at_restart = 0;     // statistics.steps at the last restart
-  // From the start of a run to its first event: the step the motion's curvature alone allows,
-  // tried once should Newton fail on IDA's shorter steps (restart()).
+  // From the start of a run until a step is as long: the step the motion's curvature alone
+  // allows, tried once should Newton fail on IDA's shorter steps (restart()).
   double first_step_by_curvature = 0;
   Vector kept_mismatch;  // correct()'s scratch
   // The error test's estimate at modified Newton's last iterate, and at the one before it.
@@ -963,6 +963,8 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       startup_phase = false;  // which would raise the order again at once
       continue;
     }
+    // Steps as long as the start's curvature allowed: the start is over (first_step_by_curvature).
+    if (t_new - t >= first_step_by_curvature) first_step_by_curvature = 0;
     complete_step(error_k, error_k_minus_1, order_new);
     corner_inside = next_time_event < t_new;
     t = t_new;

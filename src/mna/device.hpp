@@ -36,7 +36,9 @@ class ModelError : public std::runtime_error {
 constexpr int ground = -1;  // the index of the reference node: never an unknown
 constexpr double infinity = std::numeric_limits<double>::infinity();
 
-enum class UnknownCategory { node_voltage, internal_node, branch_current, auxiliary };
+// internal_current: a current only its device reads (a floating capacitor's); no element or probe
+// names it, unlike a branch_current.
+enum class UnknownCategory { node_voltage, internal_node, branch_current, internal_current, auxiliary };
 
 // The unknowns of the model: node voltages first, then whatever devices allocate.
 class Unknowns {

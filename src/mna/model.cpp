@@ -270,7 +270,8 @@ double Model::absolute_tolerance(int unknown, double) const {
   switch (unknowns_.category(unknown)) {
     case UnknownCategory::node_voltage:
     case UnknownCategory::internal_node: return tolerances_.voltage;
-    case UnknownCategory::branch_current: return tolerances_.current;
+    case UnknownCategory::branch_current:
+    case UnknownCategory::internal_current: return tolerances_.current;
     case UnknownCategory::auxiliary: return 1.0;  // a 0/1 mode, never integrated
   }
   return tolerances_.voltage;

@@ -126,7 +126,7 @@ class System {
   }
 
   // Only changes of q enter the equations, so q may be measured from any reference. A row sums
-  // the charges of the elements at a node, and rounds to the largest: a capacitor holding 1e-4 C
+  // the charges of the elements at a node, and rounds to the largest: a junction holding 1e-4 C
   // rounds each of its two rows by about 1e-20 C, differently, and a network connected to the
   // rest only by inductors (a rectifier bridge fed from inductive sources) sees the difference as
   // charge created on it, a current of 1e-20 C / h that at the picosecond steps of a start swamps

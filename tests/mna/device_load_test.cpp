@@ -39,29 +39,55 @@ TEST(DeviceLoad, CapacitorChargeAndStoredEnergy) {
   EXPECT_DOUBLE_EQ(m.stored_energy(x), 0.5 * 1e-6 * 16);
 }
 
-TEST(DeviceLoad, ChargesFromAReferenceCancelExactlyAcrossTheirPairOfRows) {
-  // A 1 uF capacitor at 156 V between p and n (1.56e-4 C), 100 pF from each to a. Measured from
-  // a reference state, each row sums changes: p's and n's rows add up to the small capacitors'
-  // changes alone (3e-17 C) to those capacitors' own rounding (eps x 1.6e-8 C), where absolute
-  // charges round each row by some 3e-20 C.
+TEST(DeviceLoad, FloatingCapacitorCarriesItsCurrentAndHoldsItsChargeInItsOwnRow) {
   CircuitSpec c;
-  c.add("cs", {"p", "n"}, 1e-6);
-  c.add("c1", {"p", "a"}, 1e-10);
-  c.add("c2", {"n", "a"}, 1e-10);
+  c.add("c1", {"a", "b"}, 2e-6);
   Model m(c, {});
-  const int p = unknown(m, "v(p)"), n = unknown(m, "v(n)"), a = unknown(m, "v(a)");
-  Vector reference(3), moved(3);
-  reference[p] = 156.3, reference[n] = 0.2, reference[a] = 0.1;
+  const int a = unknown(m, "v(a)"), b = unknown(m, "v(b)"), i = unknown(m, "i(c1)");
+  Vector x(3);
+  x[a] = 5, x[b] = 2, x[i] = 0.25;
+  const auto l = evaluate(m, 0, x, {});
+  EXPECT_DOUBLE_EQ(l.f[a], 0.25);  // i leaves node a through the capacitor into b
+  EXPECT_DOUBLE_EQ(l.f[b], -0.25);
+  EXPECT_DOUBLE_EQ(l.f[i], -0.25);  // d/dt q - i = 0
+  EXPECT_DOUBLE_EQ(l.q[i], 2e-6 * 3);
+  EXPECT_EQ(l.q[a], 0.0);  // the node rows hold no charge: C/h never meets their conductances
+  EXPECT_EQ(l.q[b], 0.0);
+  EXPECT_DOUBLE_EQ(l.dq(i, a), 2e-6);
+  EXPECT_DOUBLE_EQ(l.dq(i, b), -2e-6);
+  EXPECT_DOUBLE_EQ(l.df(a, i), 1.0);
+  EXPECT_DOUBLE_EQ(l.df(b, i), -1.0);
+  EXPECT_DOUBLE_EQ(l.df(i, i), -1.0);
+  EXPECT_EQ(m.kind(a), padae::UnknownKind::differential);
+  EXPECT_EQ(m.kind(i), padae::UnknownKind::algebraic);
+  EXPECT_DOUBLE_EQ(m.stored_energy(x), 0.5 * 2e-6 * 9);
+  // Its current is the device's own: no element or probe names it as a branch.
+  EXPECT_FALSE(m.unknowns().has_branch("c1"));
+}
+
+TEST(DeviceLoad, ChargesFromAReferenceCancelExactlyAcrossTheirPairOfRows) {
+  // A junction (CJO = 10 uF) reverse-biased by 156 V between p and n holds some 2e-4 C, 100 pF
+  // from each to ground. Measured from a reference state, each row sums changes: p's and n's
+  // rows add up to the small capacitors' changes alone (3e-17 C) to those changes' rounding,
+  // where absolute charges round each row by some 4e-20 C, differently.
+  CircuitSpec c;
+  c.add("d1", {"p", "n"}).model = {{"cjo", 1e-5}, {"vj", 0.8}, {"m", 0.5}};
+  c.add("c1", {"p", "0"}, 1e-10);
+  c.add("c2", {"n", "0"}, 1e-10);
+  Model m(c, {});
+  const int p = unknown(m, "v(p)"), n = unknown(m, "v(n)");
+  Vector reference(2), moved(2);
+  reference[p] = 0.2, reference[n] = 156.3;
   moved = reference;
   moved[p] += 1e-7, moved[n] += 2e-7;
   ASSERT_TRUE(m.measure_charges_from(0, reference, {}));
   EXPECT_TRUE(evaluate(m, 0, reference, {}).q.isZero(0));
   const auto l = evaluate(m, 0, moved, {});
-  const double common_mode = 1e-10 * (moved[p] - reference[p]) + 1e-10 * (moved[n] - reference[n]);
-  EXPECT_NEAR(l.q[p] + l.q[n], common_mode, 1e-22);
-  EXPECT_NEAR(l.q[p], 1e-6 * ((moved[p] - moved[n]) - (reference[p] - reference[n])) + 1e-10 * (moved[p] - reference[p]),
-              1e-15);
-  EXPECT_NEAR(l.q[a], -common_mode, 1e-22);
+  const double grounded_change = 1e-10 * (moved[p] - reference[p]) + 1e-10 * (moved[n] - reference[n]);
+  EXPECT_NEAR(l.q[p] + l.q[n], grounded_change, 1e-22);
+  // The junction's change: its capacitance at -156.1 V, (1 + 156.1 / 0.8)^-0.5 CJO, times 1e-7 V.
+  const double junction_change = 1e-5 / std::sqrt(1 + 156.1 / 0.8) * ((moved[p] - moved[n]) - (reference[p] - reference[n]));
+  EXPECT_NEAR(l.q[p], junction_change + 1e-10 * (moved[p] - reference[p]), 1e-3 * std::abs(junction_change));
 }
 
 TEST(DeviceLoad, CoupledInductorsFluxRows) {

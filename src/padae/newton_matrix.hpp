@@ -84,8 +84,8 @@ class NewtonMatrix {
   EvalStatus finite_difference_derivatives(double t, const Vector& x, const Predicates& p,
                                            Load& out);
   Outcome factor_loaded();
-  // J^-1 eps (|J| |x| + |other_terms|), row signs scrambled: what rounding makes of a Newton
-  // correction at x in the last factorization.
+  // |J^-1 eps (|J| |x| + |other_terms|)|, row signs scrambled: what rounding makes of a Newton
+  // correction at x in the last factorization, in size.
   void rounding_through_inverse(const Vector& x, const Vector& other_terms, Vector& out) const;
   // out += |A| |v|, A the matrix with these values on the pattern.
   void add_absolute_product(const std::vector<double>& values, const Vector& v, Vector& out) const;
@@ -110,6 +110,7 @@ class NewtonMatrix {
   std::vector<double> dq_dx_;      // dq/dx of the last factorization
   mutable Vector row_scale_;       // scratch of drift()
   mutable Vector roundoff_;        // scratch of within_roundoff()
+  mutable Vector rounding_, signed_rounding_;  // scratch of rounding_through_inverse()
   mutable Vector charge_move_;     // scratch of within_roundoff()
   std::vector<char> auxiliary_;
   std::vector<int> auxiliary_list_;

@@ -651,5 +651,48 @@ TEST(NewtonMatrix, RoundOffAllowanceCoversAFloatingCapacitorsCommonModeWhereRoun
   EXPECT_FALSE(within(1e15, 3 * tolerance, 0));
 }
 
+// Two coupled inductors, k = 1 - 1e-8, in flux rows: q = -L [1 k; k 1] i, each across a
+// source. Rows of equal size: rounding moves their difference mode (the leakage) by
+// 2 eps |i| / (1 - k), 1e8 times what it moves their common mode by.
+class TightlyCoupledInductors : public System {
+ public:
+  static constexpr double kL = 1e-3, kK = 1 - 1e-8, kV = 1;
+  int size() const override { return 2; }
+  UnknownKind kind(int) const override { return D; }
+  const Pattern& pattern() const override { return pattern_; }
+  EvalStatus load(double, const Vector& x, const Predicates&, Load& out) override {
+    out.q[0] = -kL * (x[0] + kK * x[1]);
+    out.q[1] = -kL * (kK * x[0] + x[1]);
+    out.f[0] = out.f[1] = kV;
+    if (!out.jacobian_requested) return EvalStatus::ok;
+    auto at = [&](int row, int column) { return static_cast<std::size_t>(pattern_.index(row, column)); };
+    out.dq_dx[at(0, 0)] = out.dq_dx[at(1, 1)] = -kL;
+    out.dq_dx[at(0, 1)] = out.dq_dx[at(1, 0)] = -kL * kK;
+    return EvalStatus::ok;
+  }
+
+ private:
+  static constexpr std::pair<int, int> kEntries[] = {{0, 0}, {0, 1}, {1, 0}, {1, 1}};
+  Pattern pattern_{2, kEntries};
+};
+
+TEST(NewtonMatrix, RoundOffAllowanceSeesTheLeakageModeOfSymmetricRows) {
+  TightlyCoupledInductors model;
+  Statistics statistics;
+  NewtonMatrix newton(model, statistics, Vector::Constant(2, 1e-12));
+  const Vector x{{50, 50}};
+  const double rtol = 1e-9;
+  const Vector inverse_weight = (rtol * x.cwiseAbs() + Vector::Constant(2, 1e-12)).cwiseInverse();
+  const double tolerance = 1 / inverse_weight[0];  // 5e-8 A
+  ASSERT_EQ(newton.factor(0, x, {}, 1e10), NewtonMatrix::Outcome::ok);
+  // 2 eps |i| / (1 - k) = 2.2e-6 A: a leakage correction of a few tolerances is rounding (rows 0
+  // and 1 have the same sign in one of the two patterns); one of a thousand is not.
+  auto within = [&](double leakage) {
+    return newton.within_roundoff(Vector{{leakage, -leakage}}, 1, inverse_weight, 1, x, Vector::Zero(2));
+  };
+  EXPECT_TRUE(within(3 * tolerance));
+  EXPECT_FALSE(within(1000 * tolerance));
+}
+
 }  // namespace
 }  // namespace padae

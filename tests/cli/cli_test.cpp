@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -44,6 +45,25 @@ class Cli : public ::testing::Test {
     std::stringstream s;
     s << in.rdbuf();
     return s.str();
+  }
+  // ngspice's run of `circuit` (cards without title or .end): rows of time and `vectors`, its
+  // wrdata columns; none when ngspice failed.
+  std::vector<std::vector<double>> ngspice_rows(const std::string& circuit, const std::string& vectors) {
+    const std::string reference = path("ngspice.txt");
+    const std::string deck = write("ng.cir", "* reference\n" + circuit +
+                                                 ".control\nset wr_singlescale\nset wr_vecnames\noption numdgt=12\nrun\n"
+                                                 "wrdata " + reference + " " + vectors + "\nquit\n.endc\n.end\n");
+    if (std::system(("ngspice -b " + deck + " > /dev/null 2>&1").c_str()) != 0) return {};
+    std::istringstream names(vectors), text(read(reference));
+    const auto columns = 1 + std::distance(std::istream_iterator<std::string>(names), std::istream_iterator<std::string>());
+    std::string header;
+    std::getline(text, header);
+    std::vector<std::vector<double>> rows;
+    for (std::vector<double> row(columns); text >> row[0];) {
+      for (std::size_t j = 1; j < row.size(); ++j) text >> row[j];
+      rows.push_back(row);
+    }
+    return rows;
   }
   Result run(const std::string& arguments) {
     const std::string out = path("stdout.txt"), err = path("stderr.txt");
@@ -503,12 +523,9 @@ TEST_F(Cli, ShockleyDiodeMatchesNgspice) {
        ".tran 1u 1m\n", ".tran 1u 1m 0 0.1u\n", "v(a) i(v1)", 1e-5},
   };
   for (const Case& c : cases) {
-    const std::string reference = path("ngspice.txt"), csv_path = path("padsim.csv");
-    const std::string deck = write("ng.cir", "* diode\n" + c.circuit + c.ngspice_tran +
-                                                 ".options reltol=1e-7 abstol=1e-14 vntol=1e-10 method=gear\n"
-                                                 ".control\nset wr_singlescale\nset wr_vecnames\noption numdgt=12\nrun\n"
-                                                 "wrdata " + reference + " " + c.probes + "\nquit\n.endc\n.end\n");
-    ASSERT_EQ(std::system(("ngspice -b " + deck + " > /dev/null 2>&1").c_str()), 0);
+    const std::string csv_path = path("padsim.csv");
+    const std::vector<std::vector<double>> reference_rows =
+        ngspice_rows(c.circuit + c.ngspice_tran + ".options reltol=1e-7 abstol=1e-14 vntol=1e-10 method=gear\n", c.probes);
     std::string probes = c.probes;
     std::replace(probes.begin(), probes.end(), ' ', ',');
     const Result r = run(write("pd.cir", "* diode\n" + c.circuit + c.tran + ".end\n") + " --rtol 1e-7 --probe '" + probes +
@@ -516,14 +533,6 @@ TEST_F(Cli, ShockleyDiodeMatchesNgspice) {
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const Csv csv = parse_csv(read(csv_path));
     // padsim's rows (its accepted steps) against ngspice's dense points interpolated linearly.
-    std::istringstream text(read(reference));
-    std::string header;
-    std::getline(text, header);
-    std::vector<std::vector<double>> reference_rows;
-    for (std::vector<double> row(csv.header.size()); text >> row[0];) {
-      for (std::size_t j = 1; j < row.size(); ++j) text >> row[j];
-      reference_rows.push_back(row);
-    }
     ASSERT_GT(reference_rows.size(), 100u);
     std::size_t k = 1, compared = 0;
     for (const auto& row : csv.rows) {
@@ -553,17 +562,11 @@ TEST_F(Cli, FloatingCentreTappedSecondaryRunsAndMatchesNgspice) {
       "Ls1 s1 ct 4.6875u\nLs2 ct s2 4.6875u\nK1 Lp Ls1 0.999\nK2 Lp Ls2 0.999\nK3 Ls1 Ls2 0.999\n"
       "Rct ct 0 1meg\nD1 s1 out ds\nD2 s2 out ds\nCo out ct 1u\n.model ds D(is=1e-8 n=1.2 cjo=1n)\n"
       ".tran 10n 20u uic\n";
-  const std::string reference = path("ngspice.txt"), csv_path = path("padsim.csv");
-  const std::string deck = write("ng.cir", "* secondary\n" + circuit +
-                                               ".control\nset wr_singlescale\nset wr_vecnames\noption numdgt=12\nrun\n"
-                                               "wrdata " + reference + " v(out)\nquit\n.endc\n.end\n");
-  ASSERT_EQ(std::system(("ngspice -b " + deck + " > /dev/null 2>&1").c_str()), 0);
-  std::istringstream text(read(reference));
-  std::string header;
-  std::getline(text, header);
-  double t = 0, v_out = 0;
-  while (text >> t >> v_out) {}
-  ASSERT_NEAR(t, 20e-6, 1e-12);
+  const std::string csv_path = path("padsim.csv");
+  const std::vector<std::vector<double>> reference = ngspice_rows(circuit, "v(out)");
+  ASSERT_FALSE(reference.empty());
+  ASSERT_NEAR(reference.back()[0], 20e-6, 1e-12);
+  const double v_out = reference.back()[1];
   const Result r = run(write("pd.cir", "* secondary\n" + circuit + ".end\n") + " --probe 'v(out),v(ct)' -o " + csv_path);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Csv csv = parse_csv(read(csv_path));
@@ -589,17 +592,10 @@ TEST_F(Cli, LlcConvertersIsolatedSecondaryRunsThroughHardSwitchingAndMatchesNgsp
       "K1 Lp Ls1 0.999\nK2 Lp Ls2 0.999\nK3 Ls1 Ls2 0.999\nRct ct 0 1meg\nD1 s1 out ds\nD2 s2 out ds\n"
       "Co out ct 100u\nRload out ct 2.5\n.model swm SW(vt=5 vh=0 ron=100m roff=10meg)\n"
       ".model dm D(is=1e-12 n=1.2 rs=20m)\n.model ds D(is=1e-8 n=1.2 rs=5m cjo=1n)\n.tran 10n 12u uic\n";
-  const std::string reference = path("ngspice.txt");
-  const std::string deck = write("ng.cir", "* llc\n" + circuit +
-                                               ".control\nset wr_singlescale\nset wr_vecnames\noption numdgt=12\nrun\n"
-                                               "wrdata " + reference + " v(out) i(lr)\nquit\n.endc\n.end\n");
-  ASSERT_EQ(std::system(("ngspice -b " + deck + " > /dev/null 2>&1").c_str()), 0);
-  std::istringstream text(read(reference));
-  std::string header;
-  std::getline(text, header);
-  double t = 0, v_out = 0, i_lr = 0;
-  while (text >> t >> v_out >> i_lr) {}
-  ASSERT_NEAR(t, 12e-6, 1e-12);
+  const std::vector<std::vector<double>> reference = ngspice_rows(circuit, "v(out) i(lr)");
+  ASSERT_FALSE(reference.empty());
+  ASSERT_NEAR(reference.back()[0], 12e-6, 1e-12);
+  const double v_out = reference.back()[1], i_lr = reference.back()[2];
   const std::string netlist = write("pd.cir", "* llc\n" + circuit + ".end\n");
   for (const char* rtol : {"1e-3", "1e-6"}) {
     const std::string csv_path = path(std::string("padsim") + rtol + ".csv");

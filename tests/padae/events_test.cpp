@@ -598,34 +598,41 @@ TEST(NewtonMatrix, RoundOffAllowanceCoversAnIndexTwoCurrentsUlpNoiseOnly) {
   EXPECT_FALSE(within(1, 2 / inverse_weight[1]));
 }
 
+// Two differential unknowns, every entry of the 2 x 2 Jacobians in the pattern.
+class TwoDifferentialUnknowns : public System {
+ public:
+  int size() const override { return 2; }
+  UnknownKind kind(int) const override { return D; }
+  const Pattern& pattern() const override { return pattern_; }
+
+ protected:
+  std::size_t at(int row, int column) const { return static_cast<std::size_t>(pattern_.index(row, column)); }
+
+ private:
+  static constexpr std::pair<int, int> kEntries[] = {{0, 0}, {0, 1}, {1, 0}, {1, 1}};
+  Pattern pattern_{2, kEntries};
+};
+
 // A capacitor C between nodes a and b, each tied to ground by G only (a floating secondary's
 // 1 MOhm): the pair's common mode is algebraic, and in a short step C / h swamps G in both rows.
 // Rounding then leaves the common mode resolved to about eps (C / h) |v| / G, not to the
 // tolerance: a correction of that size along it moves no charge and is the residual's noise,
 // while one across the capacitor is not. Where eps C / h exceeds G nothing resolves the
 // common mode any more, and no correction along it is noise.
-class FloatingCapacitor : public System {
+class FloatingCapacitor : public TwoDifferentialUnknowns {
  public:
   static constexpr double kC = 1e-6, kG = 1e-6, kI = 1e-3;
-  int size() const override { return 2; }
-  UnknownKind kind(int) const override { return D; }
-  const Pattern& pattern() const override { return pattern_; }
   EvalStatus load(double, const Vector& x, const Predicates&, Load& out) override {
     out.q[0] = kC * (x[0] - x[1]);
     out.q[1] = -out.q[0];
     out.f[0] = kG * x[0] - kI;
     out.f[1] = kG * x[1];
     if (!out.jacobian_requested) return EvalStatus::ok;
-    auto at = [&](int row, int column) { return static_cast<std::size_t>(pattern_.index(row, column)); };
     out.dq_dx[at(0, 0)] = out.dq_dx[at(1, 1)] = kC;
     out.dq_dx[at(0, 1)] = out.dq_dx[at(1, 0)] = -kC;
     out.df_dx[at(0, 0)] = out.df_dx[at(1, 1)] = kG;
     return EvalStatus::ok;
   }
-
- private:
-  static constexpr std::pair<int, int> kEntries[] = {{0, 0}, {0, 1}, {1, 0}, {1, 1}};
-  Pattern pattern_{2, kEntries};
 };
 
 TEST(NewtonMatrix, RoundOffAllowanceCoversAFloatingCapacitorsCommonModeWhereRoundingResolvesIt) {
@@ -654,26 +661,18 @@ TEST(NewtonMatrix, RoundOffAllowanceCoversAFloatingCapacitorsCommonModeWhereRoun
 // Two coupled inductors, k = 1 - 1e-8, in flux rows: q = -L [1 k; k 1] i, each across a
 // source. Rows of equal size: rounding moves their difference mode (the leakage) by
 // 2 eps |i| / (1 - k), 1e8 times what it moves their common mode by.
-class TightlyCoupledInductors : public System {
+class TightlyCoupledInductors : public TwoDifferentialUnknowns {
  public:
   static constexpr double kL = 1e-3, kK = 1 - 1e-8, kV = 1;
-  int size() const override { return 2; }
-  UnknownKind kind(int) const override { return D; }
-  const Pattern& pattern() const override { return pattern_; }
   EvalStatus load(double, const Vector& x, const Predicates&, Load& out) override {
     out.q[0] = -kL * (x[0] + kK * x[1]);
     out.q[1] = -kL * (kK * x[0] + x[1]);
     out.f[0] = out.f[1] = kV;
     if (!out.jacobian_requested) return EvalStatus::ok;
-    auto at = [&](int row, int column) { return static_cast<std::size_t>(pattern_.index(row, column)); };
     out.dq_dx[at(0, 0)] = out.dq_dx[at(1, 1)] = -kL;
     out.dq_dx[at(0, 1)] = out.dq_dx[at(1, 0)] = -kL * kK;
     return EvalStatus::ok;
   }
-
- private:
-  static constexpr std::pair<int, int> kEntries[] = {{0, 0}, {0, 1}, {1, 0}, {1, 1}};
-  Pattern pattern_{2, kEntries};
 };
 
 TEST(NewtonMatrix, RoundOffAllowanceSeesTheLeakageModeOfSymmetricRows) {

@@ -571,6 +571,11 @@ TEST(Events, ASourceInALoopOfCapacitorsFollowsTheClosedFormAtTightTolerances) {
   }
 }
 
+// IDA's error weights, 1 / (rtol |x| + atol): within_roundoff() measures corrections in them.
+Vector inverse_error_weight(const Vector& x, double rtol, double atol) {
+  return (rtol * x.cwiseAbs() + Vector::Constant(x.size(), atol)).cwiseInverse();
+}
+
 // In a step of h = 1 ps, one ulp of v_m (190 V) is C1 / h ulp = 2.8e-7 A of the source's current
 // i = -8.3 A, 34 times its tolerance at rtol 1e-9. A correction of that size in i is the residual's
 // rounding; one a thousand times larger is not, nor is a correction beyond the tolerance in a
@@ -583,7 +588,7 @@ TEST(NewtonMatrix, RoundOffAllowanceCoversAnIndexTwoCurrentsUlpNoiseOnly) {
   const double rtol = 1e-9, cj = 1e12;
   ASSERT_EQ(newton.factor(0, x, {0}, cj), NewtonMatrix::Outcome::ok);
   const Vector q_start = newton.load().q;
-  const Vector inverse_weight = (rtol * x.cwiseAbs() + Vector::Constant(4, 1e-12)).cwiseInverse();
+  const Vector inverse_weight = inverse_error_weight(x, rtol, 1e-12);
   const double ulp_current = SplitBus::kC1 * cj * (std::nextafter(190.0, 400.0) - 190.0);
   auto within = [&](int unknown, double correction) {
     Vector delta = Vector::Zero(4);
@@ -641,7 +646,7 @@ TEST(NewtonMatrix, RoundOffAllowanceCoversAFloatingCapacitorsCommonModeWhereRoun
   NewtonMatrix newton(model, statistics, Vector::Constant(2, 1e-9));
   const Vector x{{500, 400}};
   const double rtol = 1e-6;
-  const Vector inverse_weight = (rtol * x.cwiseAbs() + Vector::Constant(2, 1e-9)).cwiseInverse();
+  const Vector inverse_weight = inverse_error_weight(x, rtol, 1e-9);
   const double tolerance = 1 / inverse_weight[1];  // 4e-4 V
   auto within = [&](double cj, double common, double across) {
     EXPECT_EQ(newton.factor(0, x, {}, cj), NewtonMatrix::Outcome::ok);
@@ -681,7 +686,7 @@ TEST(NewtonMatrix, RoundOffAllowanceSeesTheLeakageModeOfSymmetricRows) {
   NewtonMatrix newton(model, statistics, Vector::Constant(2, 1e-12));
   const Vector x{{50, 50}};
   const double rtol = 1e-9;
-  const Vector inverse_weight = (rtol * x.cwiseAbs() + Vector::Constant(2, 1e-12)).cwiseInverse();
+  const Vector inverse_weight = inverse_error_weight(x, rtol, 1e-12);
   const double tolerance = 1 / inverse_weight[0];  // 5e-8 A
   ASSERT_EQ(newton.factor(0, x, {}, 1e10), NewtonMatrix::Outcome::ok);
   // 2 eps |i| / (1 - k) = 2.2e-6 A: a leakage correction of a few tolerances is rounding (rows 0

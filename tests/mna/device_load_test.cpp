@@ -65,13 +65,51 @@ TEST(DeviceLoad, FloatingCapacitorCarriesItsCurrentAndHoldsItsChargeInItsOwnRow)
   EXPECT_FALSE(m.unknowns().has_branch("c1"));
 }
 
-TEST(DeviceLoad, ChargesFromAReferenceCancelExactlyAcrossTheirPairOfRows) {
-  // A junction (CJO = 10 uF) reverse-biased by 156 V between p and n holds some 2e-4 C, 100 pF
-  // from each to ground. Measured from a reference state, each row sums changes: p's and n's
-  // rows add up to the small capacitors' changes alone (3e-17 C) to those changes' rounding,
-  // where absolute charges round each row by some 4e-20 C, differently.
+// A junction between two nodes off ground is a ChargeBranch too: its charge (depletion plus
+// TT times the current) in its own row, d/dt q - i = 0, the node rows +-i besides the junction's
+// current. Depletion charge: VJ CJO (1 - (1 - v / VJ)^(1 - M)) / (1 - M) below FC VJ.
+TEST(DeviceLoad, FloatingJunctionCarriesItsChargesCurrent) {
   CircuitSpec c;
-  c.add("d1", {"p", "n"}).model = {{"cjo", 1e-5}, {"vj", 0.8}, {"m", 0.5}};
+  c.add("d1", {"a", "k"}).model = {{"is", 1e-14}, {"cjo", 2e-9}, {"vj", 0.7}, {"m", 0.4}, {"tt", 1e-8}};
+  Model m(c, {});
+  const int a = unknown(m, "v(a)"), k = unknown(m, "v(k)"), i = unknown(m, "i(d1#junction)");
+  Vector x(3);
+  x[a] = 1.5, x[k] = 4.5, x[i] = 0.125;  // reverse-biased by 3 V
+  const auto l = evaluate(m, 0, x, {});
+  const double v = -3, current = -1e-14 + 1e-12 * v;  // the cubic's limit far below -3 N Vt, and GMIN
+  EXPECT_NEAR(l.f[a], current + 0.125, 1e-15);
+  EXPECT_NEAR(l.f[k], -current - 0.125, 1e-15);
+  EXPECT_DOUBLE_EQ(l.f[i], -0.125);
+  const double depletion = 0.7 * 2e-9 * (1 - std::pow(1 - v / 0.7, 1 - 0.4)) / (1 - 0.4);
+  EXPECT_NEAR(l.q[i], depletion + 1e-8 * (-1e-14), 1e-12 * std::abs(depletion));
+  EXPECT_EQ(l.q[a], 0.0);
+  EXPECT_EQ(l.q[k], 0.0);
+  const double capacitance = 2e-9 * std::pow(1 - v / 0.7, -0.4);  // TT's part: TT times ~0 S
+  EXPECT_NEAR(l.dq(i, a), capacitance, 1e-9 * capacitance);
+  EXPECT_NEAR(l.dq(i, k), -capacitance, 1e-9 * capacitance);
+  EXPECT_DOUBLE_EQ(l.df(a, i), 1.0);
+  EXPECT_DOUBLE_EQ(l.df(k, i), -1.0);
+  EXPECT_DOUBLE_EQ(l.df(i, i), -1.0);
+  EXPECT_EQ(m.kind(a), padae::UnknownKind::differential);
+  EXPECT_FALSE(m.unknowns().has_branch("d1"));
+  // A grounded junction keeps its charge in its node's row, as a grounded capacitor does.
+  CircuitSpec grounded;
+  grounded.add("d1", {"a", "0"}).model = {{"cjo", 2e-9}, {"vj", 0.7}, {"m", 0.4}};
+  Model g(grounded, {});
+  Vector y(1);
+  y << v;
+  EXPECT_EQ(g.size(), 1);
+  EXPECT_NEAR(evaluate(g, 0, y, {}).q[0], depletion, 1e-12 * std::abs(depletion));
+}
+
+TEST(DeviceLoad, ChargesFromAReferenceCancelExactlyAcrossTheirPairOfRows) {
+  // A MOSFET's bulk-drain junction (CBD = 10 uF, its charge in the node rows) reverse-biased by
+  // 156 V between bulk p and drain n holds some 2e-4 C, 100 pF from each to ground. Measured from
+  // a reference state, each row sums changes: p's and n's rows add up to the small capacitors'
+  // changes alone (3e-17 C) to those changes' rounding, where absolute charges round each row by
+  // some 4e-20 C, differently.
+  CircuitSpec c;
+  c.add("m1", {"n", "0", "0", "p"}, 1).model = {{"cbd", 1e-5}, {"pb", 0.8}, {"mj", 0.5}, {"vto", 1}};
   c.add("c1", {"p", "0"}, 1e-10);
   c.add("c2", {"n", "0"}, 1e-10);
   Model m(c, {});
@@ -85,7 +123,7 @@ TEST(DeviceLoad, ChargesFromAReferenceCancelExactlyAcrossTheirPairOfRows) {
   const auto l = evaluate(m, 0, moved, {});
   const double grounded_change = 1e-10 * (moved[p] - reference[p]) + 1e-10 * (moved[n] - reference[n]);
   EXPECT_NEAR(l.q[p] + l.q[n], grounded_change, 1e-22);
-  // The junction's change: its capacitance at -156.1 V, (1 + 156.1 / 0.8)^-0.5 CJO, times 1e-7 V.
+  // The junction's change: its capacitance at -156.1 V, (1 + 156.1 / 0.8)^-0.5 CBD, times 1e-7 V.
   const double junction_change = 1e-5 / std::sqrt(1 + 156.1 / 0.8) * ((moved[p] - moved[n]) - (reference[p] - reference[n]));
   EXPECT_NEAR(l.q[p], junction_change + 1e-10 * (moved[p] - reference[p]), 1e-3 * std::abs(junction_change));
 }

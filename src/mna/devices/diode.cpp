@@ -1,6 +1,7 @@
 // D: the junction diode with ngspice's equations (level 1: IS, N, RS, CJO, VJ, M, FC, TT, BV,
 // IBV, NBV, area), for regression against ngspice. The junction current, its charge and GMIN in
-// parallel are loaded at the junction voltage; RS adds an internal node.
+// parallel are loaded at the junction voltage; RS adds an internal node. The charge is a
+// ChargeBranch: a junction between two nodes off ground carries its current as an unknown.
 // Newton's steps into forward conduction (and into breakdown) are limited as ngspice's pnjlim
 // limits them. Past the limit a step may still land at huge forward voltages (modified Newton on
 // a held matrix): where the junction current would pass 1 kA (or at 40 thermal voltages,
@@ -11,6 +12,7 @@
 #include <optional>
 
 #include "mna/device.hpp"
+#include "mna/devices/charge_branch.hpp"
 #include "mna/devices/junction.hpp"
 
 namespace mna {
@@ -48,10 +50,11 @@ class Diode final : public Device {
     junction_ = anode_;
     if (series_resistance_ > 0)
       junction_ = u.add("v(" + name() + "#internal)", UnknownCategory::internal_node, name());
+    if (charged()) charge_.allocate(u, junction_, cathode_, name() + "#junction", name());
   }
   void declare(Stamper& s) override {
     s.block(junction_, cathode_, junction_slots_);
-    if (junction_capacitance_ > 0 || transit_time_ > 0) s.charge_block(junction_, cathode_, junction_slots_);
+    if (charged()) charge_.declare(s);
     if (series_resistance_ > 0) s.block(anode_, junction_, series_slots_);
   }
   void load(Evaluation& e) const override {
@@ -59,13 +62,9 @@ class Diode final : public Device {
     const auto [current, conductance] = junction_current(v);
     const double i = current + gmin * v;
     e.f(junction_, i), e.f(cathode_, -i);
-    const bool charged = junction_capacitance_ > 0 || transit_time_ > 0;
-    double capacitance = 0;
-    if (charged) {
+    if (charged()) {
       const auto [q, c] = junction_charge(v);
-      const double total = q + transit_time_ * current;
-      capacitance = c + transit_time_ * conductance;
-      e.q(junction_, total), e.q(cathode_, -total);
+      charge_.load(e, q + transit_time_ * current, c + transit_time_ * conductance);
     }
     if (series_resistance_ > 0) {
       const double g = 1 / series_resistance_, ir = g * (e.value(anode_) - e.value(junction_));
@@ -74,7 +73,6 @@ class Diode final : public Device {
     }
     if (!e.jacobian()) return;
     e.df(junction_slots_, conductance + gmin);
-    if (charged) e.dq(junction_slots_, capacitance);
   }
   int kink_count() const override { return 1; }
   void kinks(const Vector& x, double* out) const override { out[0] = junction_voltage(x); }
@@ -96,7 +94,7 @@ class Diode final : public Device {
   }
 
   double stored_energy(const Vector& x) const override {
-    if (junction_capacitance_ == 0 && transit_time_ == 0) return 0;
+    if (!charged()) return 0;
     return junction::charge_energy(junction_voltage(x), [&](double u) {
       return junction_charge(u).second + transit_time_ * junction_current(u).second;
     });
@@ -125,6 +123,7 @@ class Diode final : public Device {
   }
 
  private:
+  bool charged() const { return junction_capacitance_ > 0 || transit_time_ > 0; }
   double junction_voltage(const Vector& x) const { return value(x, junction_) - value(x, cathode_); }
 
   std::pair<double, double> limited_exp(double x) const { return junction::limited_exp(x, exponent_limit_); }
@@ -149,6 +148,7 @@ class Diode final : public Device {
   std::optional<double> breakdown_voltage_;
   int anode_ = ground, cathode_ = ground, junction_ = ground;
   Stamper::Block junction_slots_, series_slots_;
+  ChargeBranch charge_;
 };
 
 const Registration registration("d", [](const ElementSpec& spec, const RunSettings& run, DeviceArena& arena) {

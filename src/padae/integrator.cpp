@@ -449,10 +449,7 @@ double Integrator::Impl::first_bending_corner(double t_limit) {
   return std::numeric_limits<double>::infinity();
 }
 
-// Below this a step no longer advances t reliably.
-double Integrator::Impl::minimum_step() const {
-  return std::max({options.min_step, 16 * kEps * std::abs(t), 1e-24 * options.time_scale});
-}
+double Integrator::Impl::minimum_step() const { return std::max(options.min_step, time_resolution(t, options)); }
 
 void Integrator::Impl::update_weights() {
   peak_magnitude = peak_magnitude.cwiseMax(x.cwiseAbs());
@@ -462,6 +459,12 @@ void Integrator::Impl::update_weights() {
   // charge its unknowns' tolerances represent (for q_i = x_i, IDA's rtol |x_i| + atol_i).
   error_scale = padae::error_scale(x, peak_magnitude, options.peak_floor);
   charge_tolerance = options.rtol * error_scale + absolute_tolerance;
+  // The state at t is defined only to the rounding of t: an unknown moving at x' is uncertain by
+  // |x'| eps |t|, which no step resolves (a switch onto a 0.7 ps RC at t = 2 ms moves 1e13 V/s,
+  // 4e-6 V per ulp of t, where rtol 1e-8 asked for 7e-11 V). phi_x[1] = h x', at a restart with
+  // the first step's h.
+  const double h_of_history = h_used > 0 ? h_used : h;
+  if (h_of_history > 0) charge_tolerance += (kEps * std::abs(t) / h_of_history) * phi_x[1].cwiseAbs();
   newton.charge_scale(charge_tolerance, charge_weight);
   inverse_weight_q.resize(n);
   for (int i = 0; i < n; ++i)
@@ -857,6 +860,7 @@ StepOutcome Integrator::Impl::step(double t_stop) {
   std::array<RejectedAttempt, kMaxErrorTestFailures> rejected;  // the first error_test_failures
   int blamed = -1;  // the worst unknown of the last rejected attempt: what shrinks the step
   bool left_domain = false;  // whether the last rejected attempt could not evaluate the model
+  bool tried_minimum_step = false;
   double error = 0, error_k = 0, error_k_minus_1 = 0;
   int order_new = order;
   bool ends_at_target = false;
@@ -869,6 +873,13 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     ends_at_target = t + h >= target || t + 1.0001 * h >= target;
     if (ends_at_target) h = target - t;
     if (h < minimum_step() && !ends_at_target) {
+      // As SPICE does, the minimum step itself is tried once before giving up: a reduction by 4
+      // can pass over the step the error test would accept.
+      if (!tried_minimum_step) {
+        tried_minimum_step = true;
+        h = minimum_step();
+        continue;
+      }
       // Without a rejection here the accepted steps' error estimates shrank it.
       if (blamed < 0) weighted_max_norm(correction_q, inverse_weight_q, &blamed);
       return fail(t, "step size " + format_number(h, 17) + " s fell below the minimum step (" + format_number(minimum_step(), 3) +

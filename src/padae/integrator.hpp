@@ -14,6 +14,8 @@
 //     }
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -67,6 +69,12 @@ struct Options {
   int max_event_iterations = 50;   // predicate fixed-point iterations at one event
   int max_events_in_burst = 100;   // consecutive events within the time resolution: accumulation
 };
+
+// The shortest time step that still advances t: a few ulps of t, and near t = 0 1e-24 of the
+// run. Below it a step's end rounds to within a few ulps of its start.
+inline double time_resolution(double t, const Options& options) {
+  return std::max(16 * std::numeric_limits<double>::epsilon() * std::abs(t), 1e-24 * options.time_scale);
+}
 
 struct Statistics {
   long steps = 0;                  // accepted steps

@@ -165,7 +165,7 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   // to the settling step: its charges stay exact either way, since LU is backward stable, and
   // the settling steps fix the algebraic directions.
   const double h_settle = settle_step(t, h_reference);
-  const double h_vanishing = time_resolution(t);
+  const double h_vanishing = time_resolution(t, options_);
   Vector x_plus;
   double h_impulse = 0;
   // Lengthening is cheap and cures conditioning; continuation in the modes cures a nonlinear
@@ -207,15 +207,10 @@ std::optional<ConsistentState> Reinitializer::jump(double t, const Vector& x_sta
   return consistent;
 }
 
-// The shortest time step that still advances t; near t = 0, a millionth of the run's.
-double Reinitializer::time_resolution(double t) const {
-  return 16 * kEps * std::max(std::abs(t), 1e-6 * options_.time_scale);
-}
-
 // The settling steps (up to 4h) stay short of the next source corner: past it the motion is
 // not the one that starts at t.
 double Reinitializer::settle_step(double t, double h_reference) const {
-  const double h = std::max(kSettleFraction * h_reference, 1e5 * time_resolution(t));
+  const double h = std::max(kSettleFraction * h_reference, 1e5 * time_resolution(t, options_));
   return std::min(h, (system_.next_time_event(t) - t) / 8);
 }
 
@@ -232,7 +227,7 @@ double Reinitializer::settle_step(double t, double h_reference) const {
 std::optional<ConsistentState> Reinitializer::settle(double t, const Vector& x_plus,
                                                      const Vector& q_plus, const Predicates& p,
                                                      double h) {
-  const double h_shortest = 1e3 * time_resolution(t);
+  const double h_shortest = 1e3 * time_resolution(t, options_);
   const Vector inverse_weight =
       (options_.rtol * x_plus.cwiseAbs() + absolute_tolerance_).cwiseInverse();
   Vector differential_weight = inverse_weight;

@@ -80,7 +80,6 @@ class Reinitializer {
   bool backward_euler_with_continuation(double t_eval, double h, const Vector& q_start,
                                         const Predicates& p_from, const Predicates& p_to,
                                         Vector& x);
-  double time_resolution(double t) const;
   double settle_step(double t, double h_reference) const;
   std::optional<ConsistentState> settle(double t, const Vector& x_plus, const Vector& q_plus,
                                         const Predicates& p, double h);

@@ -36,8 +36,8 @@ class ModelError : public std::runtime_error {
 constexpr int ground = -1;  // the index of the reference node: never an unknown
 constexpr double infinity = std::numeric_limits<double>::infinity();
 
-// internal_current: a current only its device reads (a floating capacitor's); no element or probe
-// names it, unlike a branch_current.
+// internal_current: a current only its device reads (a floating capacitor's or diode junction's,
+// devices/charge_branch.hpp); no element or probe names it, unlike a branch_current.
 enum class UnknownCategory { node_voltage, internal_node, branch_current, internal_current, auxiliary };
 
 // The unknowns of the model: node voltages first, then whatever devices allocate.

@@ -836,6 +836,49 @@ def case_pwl_repeat_square_rc(c):
         c.stats_figure(r, f"{label}: ")
 
 
+def charge_pump_switch_instants():
+    """{switch: its closed-form instants over 10 us}: each gate PULSE (5 V in 5 ns) crosses 2.5 V
+    2.5 ns into its rise and its fall; S1, S3, S5 on Vt1 (delay 600 ns), S2, S4 on Vt2 (100 ns)."""
+    def crossings(delay):
+        return [t for k in range(10) for t in (delay + k * 1e-6 + 2.5e-9, delay + k * 1e-6 + 307.5e-9)]
+    return {s: crossings(600e-9 if s in ("s1", "s3", "s5") else 100e-9) for s in ("s1", "s2", "s3", "s4", "s5")}
+
+
+def case_charge_pump_clock_edges(c):
+    probes = ["v(n1)", "v(n4)", "v(out)"]
+    runs = {rtol: c.run(args=["--probe", ",".join(probes), "--rtol", f"{rtol:g}"], tag=f"rtol{rtol:g}", events=True)
+            for rtol in (1e-3, 1e-6, 1e-8)}
+    for rtol, r in runs.items():
+        if not c.expect(r.returncode == 0, f"rtol {g(rtol)}: exit 0 ({describe_status(r.returncode)})", key=True):
+            c.figure(f"rtol {g(rtol)}: {r.error_text()}")
+            continue
+        expect_rows_to_tstop(c, r, 10e-6, label=f"rtol {g(rtol)}: ")
+        exact = charge_pump_switch_instants()
+        located = {s: sorted(e["time"] for e in r.events if e["element"] == s) for s in exact}
+        counts_match = all(len(located[s]) == len(exact[s]) for s in exact)
+        worst = max((abs(t - t_exact) / t_exact for s in exact for t, t_exact in zip(located[s], exact[s])), default=0.0)
+        c.expect(counts_match and worst <= 1e-12, f"rtol {g(rtol)}: {len(r.events)} switch events (100), each within "
+                 f"{g(worst)} relative of its gate's 2.5 V crossing (<= 1e-12)", key=rtol == 1e-6)
+    r = runs[1e-6]
+    reference = ngspice_reference(c, probes, "reltol=1e-6 method=gear", 0.2e-9) if r.returncode == 0 else None
+    if not reference:
+        return
+    for probe in probes:
+        span = spicecmp.signal_range(reference.signals[probe])
+        # ngspice switches at its own time points: a step's lag at each switching instant.
+        worst, at = difference_from(reference, r, probe, t_from=20e-9)
+        c.expect(worst <= 1e-3 * span, f"rtol 1e-6: {probe} within {g(worst)} V of ngspice's (at {g(at)} s; <= 1e-3 x its "
+                 f"range {g(span)} V)", key=probe == "v(out)")
+    span = spicecmp.signal_range(reference.signals["v(out)"])
+    for rtol, r in runs.items():
+        if r.returncode != 0:
+            continue
+        error = abs(r.rows[-1][r.header.index("v(out)")] - reference.signals["v(out)"][-1])
+        bound = 10 * max(rtol, 1e-6) * span
+        c.expect(error <= bound, f"rtol {g(rtol)}: v(out) at 10 us within {g(error)} V of ngspice's (<= {g(bound)} V)")
+    c.stats_figure(runs[1e-6])
+
+
 # --- faults ---------------------------------------------------------------------------------------
 
 def case_log_negative_off_path(c):
@@ -1167,6 +1210,7 @@ NUMERIC_CASES = [
     ("events", "events_closer_than_min_step", case_events_closer_than_min_step),
     ("events", "source_jump_fast_rc", case_source_jump_fast_rc),
     ("events", "pwl_repeat_square_rc", case_pwl_repeat_square_rc),
+    ("events", "charge_pump_clock_edges", case_charge_pump_clock_edges),
     ("faults", "log_negative_off_path", case_log_negative_off_path),
     ("faults", "newton_divergence", case_newton_divergence),
     ("faults", "sqrt_argument_jumps_negative", case_sqrt_argument_jumps_negative),

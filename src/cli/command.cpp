@@ -37,9 +37,10 @@ void print_error(const std::string& message) { fmt::print(stderr, "padsim: error
 // switched converter near 1e-5 of a signal's range whatever reltol is. padsim's step has no
 // such cap, and at reltol 1e-3 the errors its local tests let through add up over the periods
 // to 1e-3 ... 2e-2 of the range (a Cuk converter: 1.7e-2). At 1e-6 they stay near SPICE's
-// default run's, in a tenth of its time. Tighter defaults are more accurate still, but 1e-7
-// fails on a three-phase rectifier whose junction capacitances ring with the line inductances.
-constexpr double kDefaultRtol = 1e-6;
+// default run's, in a tenth of its time; at 1e-8 they are a tenth of it or less on the
+// converters of the benchmark report (a boost's, summed over 50 periods, 0.10 of it), in
+// 0.15 to 0.4 of its time.
+constexpr double kDefaultRtol = 1e-8;
 
 // .options reltol, abstol (currents), vntol (voltages), as ngspice names them; the command line
 // overrides. --atol sets the absolute tolerance of every unknown. Returns false, having printed

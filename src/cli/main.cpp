@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
   app.add_option("netlist", options.netlist, "SPICE netlist with a .tran card")->required();
   app.add_option("-o,--output", options.output, "waveform CSV (default: standard output)");
   app.add_option("--probe", options.probes, "columns, e.g. \"v(out),v(a,b),i(l1)\" (default: .save/.print, else all node voltages and V and L currents)");
-  add_number(app, "--rtol", options.rtol, "relative tolerance (overrides .options reltol; default 1e-6, see the README)");
+  add_number(app, "--rtol", options.rtol, "relative tolerance (overrides .options reltol; default 1e-8, see the README)");
   add_number(app, "--atol", options.atol, "absolute tolerance of every unknown (overrides .options abstol and vntol)");
   add_number(app, "--tstop", options.tstop, "stop time (overrides .tran)");
   app.add_option_function<std::string>(

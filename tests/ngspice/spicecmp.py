@@ -155,7 +155,7 @@ def replace_tran(text, tran):
 # gear, because trapezoidal rings after a switch. The maximum step is set per case (run_regression).
 TIGHT_OPTIONS = "reltol=1e-7 abstol=1e-14 vntol=1e-9 method=gear"
 # padsim's reltol when neither the netlist nor --rtol gives one (src/cli/command.cpp, kDefaultRtol).
-PADSIM_DEFAULT_RTOL = 1e-6
+PADSIM_DEFAULT_RTOL = 1e-8
 
 
 def ngspice_deck(netlist_text, probes, data_path, options="", max_step=None, accounting=True):

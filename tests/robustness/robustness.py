@@ -297,7 +297,7 @@ def display_command(command, workdir, cwd):
 # --- stiff ----------------------------------------------------------------------------------------
 
 def tolerance_runs(c, extra=(), events=False, tighter=()):
-    """The runs of a smooth case, at SPICE's reltol 1e-3, at padsim's defaults (rtol 1e-6) and at
+    """The runs of a smooth case, at SPICE's reltol 1e-3, at padsim's defaults (rtol 1e-8) and at
     each rtol of `tighter`, each with the arguments `extra`: (label, rtol, tolerance arguments,
     run) for each run that succeeds; a run that fails is recorded as a failed criterion."""
     runs = [("rtol 1e-3", 1e-3, ["--rtol", "1e-3"]), ("default", DEFAULT_RTOL, [])]

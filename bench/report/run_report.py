@@ -860,7 +860,8 @@ def targets(results):
             continue
         er, tr = p["error_max"] / n["error_max"], p["seconds"] / n["seconds"]
         met = met and er <= 0.1 and tr <= 1
-        parts.append("%s: error x%s, time x%s" % (name, rl.fmt(er), rl.fmt(tr)))
+        # Three digits: a ratio of 0.103 is no "0.1" against a bound of 0.1.
+        parts.append("%s: error x%s, time x%s" % (name, rl.fmt(er, 3), rl.fmt(tr)))
     rows.append(("At default settings: padsim's error <= 0.1 x ngspice's, at no more time",
                  "padsim `--grid` on the netlist as written (its default reltol %g) / ngspice at reltol 1e-3 with "
                  "trap (its defaults): " % sc.PADSIM_DEFAULT_RTOL + "; ".join(parts), met and bool(parts)))
@@ -1033,8 +1034,8 @@ def write_markdown(results, meta, out_path, img_rel):
     L.append("## Method")
     L.append("")
     L.append("- **Tolerances.** Both simulators read the same `.options reltol=R vntol=V` card, V = min(1e-6, "
-             "1e-3 R) (SPICE's 1 uV at R >= 1e-3; R = 1e-3 is ngspice's default, padsim's is 1e-6 with the same V, "
-             "run apart for the defaults target on the netlist as written). padsim: R = "
+             "1e-3 R) (SPICE's 1 uV at R >= 1e-3; R = 1e-3 is ngspice's default, padsim's is %g with the same V, "
+             "run apart for the defaults target on the netlist as written). padsim: R = " % sc.PADSIM_DEFAULT_RTOL +
              "1e-2 ... 1e-9; ngspice: R = 1e-2 ... 1e-7 with its default trapezoidal method and with "
              "`method=gear`; abstol stays at its default 1 pA. ngspice runs the netlist's `.tran` as written, so its "
              "step is bounded by TSTEP (its default TMAX); padsim's by (TSTOP - TSTART) / 50 and a twentieth of any "

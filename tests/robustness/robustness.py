@@ -848,12 +848,12 @@ def case_charge_pump_clock_edges(c):
     probes = ["v(n1)", "v(n4)", "v(out)"]
     runs = {rtol: c.run(args=["--probe", ",".join(probes), "--rtol", f"{rtol:g}"], tag=f"rtol{rtol:g}", events=True)
             for rtol in (1e-3, 1e-6, 1e-8)}
+    exact = charge_pump_switch_instants()
     for rtol, r in runs.items():
         if not c.expect(r.returncode == 0, f"rtol {g(rtol)}: exit 0 ({describe_status(r.returncode)})", key=True):
             c.figure(f"rtol {g(rtol)}: {r.error_text()}")
             continue
         expect_rows_to_tstop(c, r, 10e-6, label=f"rtol {g(rtol)}: ")
-        exact = charge_pump_switch_instants()
         located = {s: sorted(e["time"] for e in r.events if e["element"] == s) for s in exact}
         counts_match = all(len(located[s]) == len(exact[s]) for s in exact)
         worst = max((abs(t - t_exact) / t_exact for s in exact for t, t_exact in zip(located[s], exact[s])), default=0.0)

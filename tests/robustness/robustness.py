@@ -382,6 +382,44 @@ def case_switch_ron_roff_1e15(c):
         c.stats_figure(r, f"{label}: ")
 
 
+def inductor_into_roff_current(t, t_open=1e-3 + 0.5e-9, vin=5.0, r=1.0, ron=1.0, roff=1e12, inductance=1e-3):
+    """i(l1) of switch_opens_inductor_into_roff: the closed switch's steady current, then its decay
+    into ROFF, and the slope there."""
+    i_on, i_off, tau = vin / (r + ron), vin / (r + roff), inductance / (r + roff)
+    if t < t_open:
+        return i_on, 0.0
+    decay = (i_on - i_off) * math.exp(-(t - t_open) / tau)
+    return i_off + decay, -decay / tau
+
+
+def case_switch_opens_inductor_into_roff(c):
+    t_open, i_on, v_settled = 1e-3 + 0.5e-9, 2.5, 5.0 * 1e12 / (1 + 1e12)
+    for label, rtol, args, r in tolerance_runs(c, events=True, tighter=(1e-6, 1e-10)):
+        times = [e["time"] for e in r.events]
+        deviation = abs(times[0] / t_open - 1) if len(times) == 1 else math.inf
+        c.expect(deviation <= 1e-12, f"{label}: one event ({len(times)}), {g(deviation)} relative from {t_open!r} s (<= 1e-12)")
+        expect_rows_to_tstop(c, r, 2e-3, label=f"{label}: ")
+        # A row's time is its instant only to its rounding: the decay moves 2.5e15 A/s, 5e-4 A
+        # per ulp of t at 1 ms. Each row's error is taken beyond 32 ulps of that; the row before
+        # the event (its time the same as the next row's) is the state before it.
+        t_col, i_col = r.times(), r.column("i(l1)")
+        worst, at = 0.0, None
+        for k, (t, i) in enumerate(zip(t_col, i_col)):
+            if k + 1 < len(t_col) and t_col[k + 1] == t:
+                continue
+            exact, slope = inductor_into_roff_current(t)
+            err = max(0.0, abs(i - exact) - abs(slope) * 32 * sys.float_info.epsilon * t)
+            if err > worst:
+                worst, at = err, t
+        c.expect(worst <= 10 * rtol * i_on,
+                 f"{label}: i(l1) within {g(worst)} A of the closed form (at t = {g(at)} s) <= 10 rtol x {g(i_on)} A",
+                 key=not args)
+        v_end = r.column("v(c)")[-1]
+        c.expect(abs(v_end - v_settled) <= 10 * rtol * 5.0,
+                 f"{label}: v(c) at tstop {v_end!r} V, ROFF's divider {v_settled!r} V within 10 rtol x 5 V")
+        c.stats_figure(r, f"{label}: ")
+
+
 def case_inductors_1p_1meg(c):
     i2_size = lag_response([1e6], 1.0, 1e-6, 1e-12)
     check_lag_columns(c, {"i(l1)": (lambda t: lag_response([1e-12], t, 1e-6, 1e-12), 1.0),
@@ -1193,6 +1231,7 @@ NUMERIC_CASES = [
     ("stiff", "stiff_time_constants", case_stiff_time_constants),
     ("stiff", "uic_start_fast_rc", case_uic_start_fast_rc),
     ("stiff", "switch_ron_roff_1e15", case_switch_ron_roff_1e15),
+    ("events", "switch_opens_inductor_into_roff", case_switch_opens_inductor_into_roff),
     ("stiff", "inductors_1p_1meg", case_inductors_1p_1meg),
     ("stiff", "capacitors_1e-18_1", case_capacitors_1e_18_1),
     ("stiff", "volts_1e6_and_1e-9", case_volts_1e6_and_1e_9),

@@ -206,6 +206,12 @@ EvalStatus NewtonMatrix::charge_determined(double t, const Vector& x, const Pred
   return EvalStatus::ok;
 }
 
+int NewtonMatrix::first_non_finite_row() const {
+  for (Eigen::Index i = 0; i < load_.f.size(); ++i)
+    if (!std::isfinite(load_.f[i]) || !std::isfinite(load_.q[i])) return static_cast<int>(i);
+  return -1;
+}
+
 NewtonMatrix::Outcome NewtonMatrix::factor_shifted(double t, const Vector& x, const Predicates& p,
                                                    double shift, double cj) {
   if (load_with_derivatives(t, x, p, load_) != EvalStatus::ok) return Outcome::outside_domain;

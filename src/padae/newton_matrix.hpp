@@ -49,6 +49,9 @@ class NewtonMatrix {
     return system_.newton_step_fraction(x, x_next);
   }
   const Load& load() const { return load_; }
+  // The first row whose f or q in load() is not finite, -1 if none: the equation that names
+  // the element a model evaluation outside its domain came from.
+  int first_non_finite_row() const;
   // |dq/dx| summed into row weights: sum_j |dq_ij/dx_j| * scale_j (zero for algebraic rows).
   void charge_scale(const Vector& scale, Vector& out) const;
   // Per unknown, whether some row's charge depends on it alone (that row of dq/dx at (t, x, p)

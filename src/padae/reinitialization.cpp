@@ -331,12 +331,10 @@ void Reinitializer::outside_domain_at(double t, const Vector& x, std::initialize
   // The first equation a mode cannot evaluate at x names its element.
   for (const Predicates* p : modes) {
     if (newton_.evaluate(t, x, *p) == EvalStatus::ok) continue;
-    const Load& load = newton_.load();
-    for (Eigen::Index i = 0; i < load.f.size(); ++i)
-      if (!std::isfinite(load.f[i]) || !std::isfinite(load.q[i])) {
-        failure_unknown_ = static_cast<int>(i);
-        return;
-      }
+    if (const int row = newton_.first_non_finite_row(); row >= 0) {
+      failure_unknown_ = row;
+      return;
+    }
   }
 }
 

@@ -30,12 +30,14 @@ class SteadyStateSolver {
   bool newton(Vector& x, const Vector& x_previous, const Predicates& p, double shift) {
     const Vector held = x;
     left_domain_at_.reset();
+    left_domain_ = false;
     double previous_norm = std::numeric_limits<double>::infinity();
     for (int iteration = 0; iteration < kMaxNewtonIterations; ++iteration) {
       const NewtonMatrix::Outcome outcome = newton_.factor_shifted(t_, x, p, shift);
       if (outcome != NewtonMatrix::Outcome::ok) {
-        if (outcome == NewtonMatrix::Outcome::outside_domain && iteration > 0) left_domain_at_ = x;
-        worst_ = newton_.singular_column();
+        left_domain_ = outcome == NewtonMatrix::Outcome::outside_domain;
+        if (left_domain_ && iteration > 0) left_domain_at_ = x;
+        worst_ = left_domain_ ? newton_.first_non_finite_row() : newton_.singular_column();
         return false;
       }
       Vector delta = newton_.load().f + shift * (x - x_previous);
@@ -126,6 +128,8 @@ class SteadyStateSolver {
   }
 
   int worst() const { return worst_; }
+  // Whether the last newton() failed because the model could not be evaluated.
+  bool left_domain() const { return left_domain_; }
   // The iterate at which the last newton() left the model's domain, if it did.
   const std::optional<Vector>& left_domain_at() const { return left_domain_at_; }
 
@@ -137,6 +141,7 @@ class SteadyStateSolver {
   Vector absolute_tolerance_;
   NewtonMatrix newton_;
   int worst_ = -1;
+  bool left_domain_ = false;
   std::optional<Vector> left_domain_at_;
 };
 
@@ -205,7 +210,10 @@ SteadyState steady_state(System& system, double t, const Vector& x_guess, const 
           flip_one(k);
           continue;
         }
-        result.message = "no steady state: Newton's method and pseudo-transient continuation fail";
+        result.message = solver.left_domain()
+                             ? "no steady state: the model cannot be evaluated (outside its domain) where Newton's "
+                               "method and pseudo-transient continuation go"
+                             : "no steady state: Newton's method and pseudo-transient continuation fail";
         result.worst_unknown = solver.worst();
         return result;
       }

@@ -629,6 +629,15 @@ TEST_F(Cli, StatsSplitTheRejectedSteps) {
   EXPECT_GT(std::atoi(r.err.c_str() + at + 19), 0) << r.err;
 }
 
+TEST_F(Cli, ConstantOutsideItsDomainNamesTheElement) {
+  // sqrt(-1) is NaN at every point Newton tries: no operating point, and the element says why.
+  const Result r = run(write("nan.cir", "* nan\nV1 in 0 1\nR2 in 0 1\nB1 a 0 V=sqrt(-1)\nR1 a 0 1\n.tran 1u 1m\n.end\n") +
+                       " -o " + path("o.csv"));
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("the model cannot be evaluated (outside its domain)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(element b1, unknown i(b1))"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, EventLogQuotesLabelsWithCommas) {
   const std::string events = path("events.csv");
   const Result r = run(write("lab.cir", "* label\nV1 a 0 SIN(0 1 1k)\nB1 o 0 V={v(a,0) > 0.5 ? 1 : 0}\nR1 o 0 1\n"

@@ -473,15 +473,22 @@ class Session {
   }
 
   // Flush the waveform, plot, statistics, temporary file. A failed plot makes exit 1 (the
-  // waveform is complete, but not every requested output).
+  // waveform is complete, but not every requested output). A run that failed mid-way is plotted
+  // up to where it stopped, which the plot's title says; one stopped by a signal is not.
   int finish(int status) {
     if (progress_) progress_->clear();
     waveforms_.finish();
-    if (status == success && !options_.plot.empty()) {
+    const bool stopped = status == simulation_failure && !StopSignals::received();
+    if (!options_.plot.empty() && stopped && !wrote_rows_) {
+      print_error(fmt::format("plot: '{}' not written: no rows were computed", options_.plot));
+    } else if (!options_.plot.empty() && (status == success || stopped)) {
+      const std::string note = stopped ? fmt::format("the run stopped at t = {:.9g} s", last_row_) : "";
       std::string error;
-      if (!output::plot_png(plot_csv_, options_.plot, error)) {
+      if (!output::plot_png(plot_csv_, options_.plot, note, error)) {
         print_error("plot: " + error);
         status = simulation_failure;
+      } else if (stopped) {
+        fmt::print(stderr, "padsim: note: the plot '{}' shows the waveform up to t = {:.9g} s\n", options_.plot, last_row_);
       }
     }
     if (!temporary_csv_.empty()) std::filesystem::remove(temporary_csv_);
@@ -514,6 +521,7 @@ class Session {
     if (t < tstart_) return;
     waveforms_.row(t, x);
     last_row_ = t;
+    wrote_rows_ = true;
   }
   int interrupted(double t) {
     if (progress_) progress_->clear();
@@ -560,6 +568,7 @@ class Session {
   std::unique_ptr<Progress> progress_;
   long next_grid_ = 0;
   double last_row_ = 0;  // the time of the last row written
+  bool wrote_rows_ = false;
 };
 
 }  // namespace

@@ -629,6 +629,30 @@ TEST_F(Cli, StatsSplitTheRejectedSteps) {
   EXPECT_GT(std::atoi(r.err.c_str() + at + 19), 0) << r.err;
 }
 
+TEST_F(Cli, FailedRunPlotsTheWaveformUpToWhereItStopped) {
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "gnuplot not installed";
+  // sqrt(v(in) + 1) leaves its domain at 0.5 ms, as in FailureKeepsTheWaveformAndSaysWhenAndWhy.
+  const std::string png = path("domain.png");
+  const Result r = run(write("domain.cir",
+                             "* domain error\nV1 in 0 PWL(0 1 1m -3)\nB1 out 0 V=sqrt(v(in)+1)\nR1 out 0 1\n.tran 1u 1m\n.end\n") +
+                       " -o " + path("out.csv") + " --plot " + png);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(read(png).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  const std::size_t at = r.err.find("the plot '" + png + "' shows the waveform up to t = ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  const double last = parse_csv(read(path("out.csv"))).rows.back()[0];
+  EXPECT_NEAR(std::strtod(r.err.c_str() + r.err.find("t = ", at) + 4, nullptr), last, 1e-8 * last);
+}
+
+TEST_F(Cli, FailedStartSaysThePlotIsNotWritten) {
+  const std::string png = path("nan.png");
+  const Result r = run(write("nan.cir", "* nan\nB1 a 0 V=sqrt(-1)\nR1 a 0 1\n.tran 1u 1m\n.end\n") + " -o " + path("o.csv") +
+                       " --plot " + png);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_FALSE(fs::exists(png));
+  EXPECT_NE(r.err.find("plot: '" + png + "' not written: no rows were computed"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, ConstantOutsideItsDomainNamesTheElement) {
   // sqrt(-1) is NaN at every point Newton tries: no operating point, and the element says why.
   const Result r = run(write("nan.cir", "* nan\nV1 in 0 1\nR2 in 0 1\nB1 a 0 V=sqrt(-1)\nR1 a 0 1\n.tran 1u 1m\n.end\n") +

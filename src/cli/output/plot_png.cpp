@@ -85,7 +85,7 @@ struct Panel {
 
 }  // namespace
 
-bool plot_png(const std::string& csv_path, const std::string& png_path, std::string& error) {
+bool plot_png(const std::string& csv_path, const std::string& png_path, const std::string& note, std::string& error) {
   std::ifstream in(csv_path);
   if (!in) {
     error = fmt::format("cannot read '{}'", csv_path);
@@ -143,7 +143,8 @@ bool plot_png(const std::string& csv_path, const std::string& png_path, std::str
   put(script, "set output {}\n", quote(png_path));
   put(script, "set datafile separator ','\n");
   put(script, "set grid\nset key top right noenhanced\nset lmargin 12\nset rmargin 4\n");
-  put(script, "set multiplot layout {},1 title {} noenhanced\n", panels.size(), quote(std::filesystem::path(csv_path).filename().string()));
+  const std::string title = std::filesystem::path(csv_path).filename().string();
+  put(script, "set multiplot layout {},1 title {} noenhanced\n", panels.size(), quote(note.empty() ? title : title + " (" + note + ")"));
   for (std::size_t p = 0; p < panels.size(); ++p) {
     const auto& panel = panels[p];
     put(script, "set ylabel {}\n", quote(panel.ylabel));

@@ -36,7 +36,8 @@ std::unique_ptr<WaveformWriter> make_raw_writer(const std::string& path, bool bi
 
 // Plots a CSV written by make_csv_writer into a PNG with gnuplot: time on x (scaled to s, ms, us
 // or ns), one stacked panel per signal (signals grouped into a voltage and a current panel when
-// there are more than six). Returns false and sets error when gnuplot is missing or fails.
-bool plot_png(const std::string& csv_path, const std::string& png_path, std::string& error);
+// there are more than six), titled with the CSV's name and the note, if any. Returns false and
+// sets error when gnuplot is missing or fails.
+bool plot_png(const std::string& csv_path, const std::string& png_path, const std::string& note, std::string& error);
 
 }  // namespace padsim::output

@@ -357,7 +357,7 @@ TEST(PlotPng, WritesAPng) {
     w->finish();
   }
   std::string error;
-  ASSERT_TRUE(plot_png(csv.string(), png.string(), error)) << error;
+  ASSERT_TRUE(plot_png(csv.string(), png.string(), "", error)) << error;
   auto bytes = slurp(png);
   ASSERT_GT(bytes.size(), 2000u);
   EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
@@ -366,11 +366,11 @@ TEST(PlotPng, WritesAPng) {
 
 TEST(PlotPng, ReportsErrors) {
   std::string error;
-  EXPECT_FALSE(plot_png("/nonexistent/x.csv", scratch("x.png").string(), error));
+  EXPECT_FALSE(plot_png("/nonexistent/x.csv", scratch("x.png").string(), "", error));
   EXPECT_NE(error.find("/nonexistent/x.csv"), std::string::npos);
   auto empty = scratch("empty.csv");
   std::ofstream(empty) << "time,v(a)\n";
   error.clear();
-  EXPECT_FALSE(plot_png(empty.string(), scratch("y.png").string(), error));
+  EXPECT_FALSE(plot_png(empty.string(), scratch("y.png").string(), "", error));
   EXPECT_FALSE(error.empty());
 }

@@ -439,6 +439,7 @@ class Session {
         if ((uic_ && mode_structure_refused()) || singular()) return bad_input;
         return fail(integrator_->failure());
       }
+      if (uic_ && !options_.quiet) warn_overridden_initial_conditions();
       emit(0, integrator_->state());
 
       while (integrator_->time() < settings_.tstop) {
@@ -516,6 +517,17 @@ class Session {
   int fail(const padae::Failure& failure) {
     const std::string fault = failure.diagnosis.empty() ? mna::mode_structure_fault(*model_, integrator_->predicates()) : "";
     return fail(failure.t, failure.reason, failure.unknown, fault.empty() ? failure.diagnosis : "in the modes it stopped in: " + fault);
+  }
+  // uic starts from the initial conditions as given, and the consistent state at t = 0+ may
+  // not keep them: a capacitor across a source, or capacitors in a loop whose ICs disagree,
+  // take their charges at once (a jump). Said, since the netlist asked for other values.
+  void warn_overridden_initial_conditions() const {
+    for (const auto& ic : model_->overridden_initial_conditions(integrator_->state(), integrator_options_.rtol,
+                                                                integrator_options_.atol)) {
+      const char* unit = ic.current ? "A" : "V";
+      fmt::print(stderr, "padsim: warning: uic: the initial condition of {} ({:.6g} {}) is {:.6g} {} at t = 0+: the circuit "
+                 "overrides it\n", ic.name, ic.given, unit, ic.at_x, unit);
+    }
   }
   void emit(double t, const mna::Vector& x) {
     if (t < tstart_) return;

@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <memory_resource>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -254,6 +255,17 @@ class Device {
 
   // Initial condition (IC=) written into x0 for a uic start.
   virtual void initial_condition(Vector& x0) const { (void)x0; }
+  // The IC= given and the same quantity at x (a capacitor's voltage, an inductor's current),
+  // with the unknown whose tolerance measures it: tells a start that kept it from one the
+  // circuit overrode (a capacitor across a source). None without IC=.
+  struct InitialConditionAt {
+    double given, at_x;
+    int unknown;
+  };
+  virtual std::optional<InitialConditionAt> initial_condition_at(const Vector& x) const {
+    (void)x;
+    return std::nullopt;
+  }
 
  protected:
   const ElementSpec& card() const { return *card_; }

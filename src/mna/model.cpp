@@ -296,6 +296,20 @@ Vector Model::initial_conditions() const {
   return x0;
 }
 
+std::vector<Model::OverriddenInitialCondition> Model::overridden_initial_conditions(const Vector& x, double rtol,
+                                                                                 double default_atol) const {
+  std::vector<OverriddenInitialCondition> overridden;
+  auto check = [&](std::string name, double given, double at_x, int unknown) {
+    const double tolerance = rtol * std::max(std::abs(given), std::abs(at_x)) + absolute_tolerance(unknown, default_atol);
+    if (std::abs(at_x - given) > 10 * tolerance)
+      overridden.push_back({std::move(name), given, at_x, unknowns_.category(unknown) != UnknownCategory::node_voltage});
+  };
+  for (const auto& d : devices_)
+    if (const auto at = d->initial_condition_at(x)) check(d->name(), at->given, at->at_x, at->unknown);
+  for (const auto& [n, value] : held_nodes_) check(unknowns_.label(n), value, x[n], n);
+  return overridden;
+}
+
 Vector Model::operating_point_guess() const {
   Vector x = initial_conditions();
   for (const auto& [n, value] : nodesets_)

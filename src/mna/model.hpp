@@ -67,6 +67,15 @@ class Model final : public padae::System {
   // Predicates at (t, x) from the guards, except that a predicate an auxiliary mode follows
   // (a switch's state, an ideal diode's mode) starts equal to that mode.
   padae::Predicates initial_predicates(double t, const Vector& x) const;
+  // The initial conditions (IC=, .ic) that x does not keep, beyond ten times their tolerances
+  // (rtol relative, the unknown's absolute one): after a uic start, those the circuit overrode.
+  struct OverriddenInitialCondition {
+    std::string name;  // "c1", or "v(a)" for a .ic node voltage
+    double given, at_x;
+    bool current;  // amperes, else volts
+  };
+  std::vector<OverriddenInitialCondition> overridden_initial_conditions(const Vector& x, double rtol,
+                                                                        double default_atol) const;
   // initial_conditions() with the .nodeset voltages: where the operating point's Newton starts.
   Vector operating_point_guess() const;
   // While set, the .ic node voltages are held fixed (the operating point, as ngspice does).

@@ -662,6 +662,26 @@ TEST_F(Cli, ConstantOutsideItsDomainNamesTheElement) {
   EXPECT_NE(r.err.find("(element b1, unknown i(b1))"), std::string::npos) << r.err;
 }
 
+TEST_F(Cli, UicSaysWhichInitialConditionsTheCircuitOverrides) {
+  // C1 sits across the 5 V source: its IC of 2 V cannot hold at t = 0+ (its charge jumps), nor
+  // the .ic on v(a); C2 (IC = 3 V behind 1 kOhm) and L1 (IC = 1 mA) keep theirs, and v(c) is
+  // then L1's 1 mA through R3 = 1 kOhm, not the 0.5 V its .ic asks for.
+  const Result r = run(write("uic.cir", "* uic\nV1 a 0 5\nC1 a 0 1u IC=2\nR1 a b 1k\nC2 b 0 1u IC=3\nL1 b c 1m IC=1m\n"
+                                        "R3 c 0 1k\n.ic v(a)=2 v(c)=0.5\n.tran 1u 1m uic\n.end\n") +
+                       " -o " + path("o.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: uic: the initial condition of c1 (2 V) is 5 V at t = 0+"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("the initial condition of v(a) (2 V) is 5 V at t = 0+"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("the initial condition of v(c) (0.5 V) is 1 V at t = 0+"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("c2"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("l1"), std::string::npos) << r.err;
+  const Csv csv = parse_csv(read(path("o.csv")));
+  EXPECT_DOUBLE_EQ(csv.rows.front()[csv.column("v(b)")], 3.0);
+  EXPECT_DOUBLE_EQ(csv.rows.front()[csv.column("i(l1)")], 1e-3);
+  const Result quiet = run(path("uic.cir") + " -o " + path("o.csv") + " -q");
+  EXPECT_EQ(quiet.err, "");
+}
+
 TEST_F(Cli, EventLogQuotesLabelsWithCommas) {
   const std::string events = path("events.csv");
   const Result r = run(write("lab.cir", "* label\nV1 a 0 SIN(0 1 1k)\nB1 o 0 V={v(a,0) > 0.5 ? 1 : 0}\nR1 o 0 1\n"

@@ -27,6 +27,10 @@ class Capacitor final : public Device {
     return 0.5 * capacitance_ * v * v;
   }
   // IC= sets the voltage across: the non-ground node (or node a, relative to node b).
+  std::optional<InitialConditionAt> initial_condition_at(const Vector& x) const override {
+    if (!card().initial_condition) return std::nullopt;
+    return InitialConditionAt{*card().initial_condition, value(x, a_) - value(x, b_), a_ != ground ? a_ : b_};
+  }
   void initial_condition(Vector& x0) const override {
     const std::optional<double>& initial_voltage = card().initial_condition;
     if (!initial_voltage) return;

@@ -39,6 +39,11 @@ void Inductor::initial_condition(Vector& x0) const {
   if (card().initial_condition) x0[branch_] = *card().initial_condition;
 }
 
+std::optional<Device::InitialConditionAt> Inductor::initial_condition_at(const Vector& x) const {
+  if (!card().initial_condition) return std::nullopt;
+  return InitialConditionAt{*card().initial_condition, x[branch_], branch_};
+}
+
 namespace {
 const Registration registration("l", [](const ElementSpec& spec, const RunSettings&, DeviceArena& arena) {
   return arena.make<Inductor>(spec);

@@ -17,6 +17,7 @@ class Inductor final : public Device {
   void edges(std::vector<Edge>& out) const override;
   double stored_energy(const Vector& x) const override;
   void initial_condition(Vector& x0) const override;
+  std::optional<InitialConditionAt> initial_condition_at(const Vector& x) const override;
 
   double inductance() const { return inductance_; }
   int branch() const { return branch_; }

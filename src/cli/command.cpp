@@ -187,6 +187,32 @@ class Progress {
   Clock::time_point start_ = Clock::now(), last_ = start_;
 };
 
+// Why a source's detail is finer than the integrator can resolve where it is (a few ulps of t,
+// 1e-24 of the run near t = 0), if it is: a stop time far beyond the sources' time scale (a
+// 10 us PULSE with TSTOP 1e300 s). Each source's first corners from 0, and the steps its
+// periods ask for (a sine's) at the stop time, are checked; empty when they are resolved.
+std::string unresolved_source_detail(const mna::Model& model, const padae::Options& options, double tstop) {
+  constexpr int kCornersChecked = 1000;
+  for (const auto& device : model.devices()) {
+    if (!device->time_dependent()) continue;
+    if (const double step = device->resolution_step(); step < padae::time_resolution(tstop, options))
+      return fmt::format("the stop time {:g} s is too long for {}'s detail: the steps that resolve it ({:.3g} s) are "
+                         "below the time resolution the run has at its end ({:.3g} s)",
+                         tstop, device->name(), step, padae::time_resolution(tstop, options));
+    double previous = 0;
+    for (int k = 0; k < kCornersChecked; ++k) {
+      const double corner = device->next_time_event(previous);
+      if (!(corner <= tstop)) break;
+      if (corner - previous < padae::time_resolution(corner, options))
+        return fmt::format("the stop time {:g} s is too long for {}'s detail: its corners at {:g} s and {:g} s are closer "
+                           "than the time resolution the run has there ({:.3g} s)",
+                           tstop, device->name(), previous, corner, padae::time_resolution(corner, options));
+      previous = corner;
+    }
+  }
+  return "";
+}
+
 std::string blame(const mna::Model& model, int unknown) {
   if (unknown < 0 || unknown >= model.size()) return "";
   const auto& u = model.unknowns();
@@ -323,6 +349,11 @@ class Session {
       model_ = std::make_unique<mna::Model>(mna::circuit_from_netlist(*flat), settings_);
       model_->set_tolerances(tolerances);
       integrator_options_.max_step = std::min(integrator_options_.max_step, model_->resolution_step());
+      if (const std::string unresolved = unresolved_source_detail(*model_, integrator_options_, settings_.tstop);
+          !unresolved.empty()) {
+        print_error(unresolved);
+        return bad_input;
+      }
       mna::check_structure(*model_, start_kind());
       if (!options_.probes.empty()) probes_ = parse_probes(options_.probes, *model_);
       else if (!flat->saves.empty()) probes_ = requested_probes(flat->saves, *model_);

@@ -84,6 +84,8 @@ constexpr double kRestartCurvatureBound = 1;
 // 19x, about ten times what the order-3 step's estimate of order 4 predicted). The order rises
 // further once real points fill the history (IDA's order selection, after k + 1 steps of one size).
 constexpr int kStartupOrder = 3;
+// Source corners one step may pass (guards sampled at each): bounds a step's work.
+constexpr int kMostCornersPassed = 1000;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 // Zeno behaviour: this many consecutive event intervals, each shrinking by this ratio or more,
 // are taken as events accumulating toward a finite time.
@@ -317,7 +319,10 @@ struct Integrator::Impl {
   std::vector<char> corner_can_reach;
   std::vector<int> corner_rows;
   bool corner_bends(double t_from);
-  double first_bending_corner(double t_limit);
+  struct CornersAhead {
+    double bending, last_passable;
+  };
+  CornersAhead corners_ahead(double t_limit);
   EventRecord last_event;
   Failure failure{0, "", -1};
   double last_event_time = -std::numeric_limits<double>::infinity();
@@ -442,11 +447,17 @@ bool Integrator::Impl::corner_bends(double t_from) {
   return std::any_of(corner_rows.begin(), corner_rows.end(), [&](int row) { return row_bends_solution[row] != 0; });
 }
 
-// The first corner after t that bends the solution, among those up to t_limit; else +inf.
-double Integrator::Impl::first_bending_corner(double t_limit) {
-  for (double from = t, corner = next_time_event; corner <= t_limit; from = corner, corner = system.next_time_event(corner))
-    if (corner_bends(from)) return corner;
-  return std::numeric_limits<double>::infinity();
+// The corners ahead of a step up to t_limit: the first that bends the solution (the step ends
+// there and the BDF restarts), or else the kMostCornersPassed-th, beyond which the step may not
+// go: it samples the guards at each corner it passes, and a step over astronomically many (a
+// clock far faster than the circuit) would not end. +inf where there is none.
+Integrator::Impl::CornersAhead Integrator::Impl::corners_ahead(double t_limit) {
+  int passed = 0;
+  for (double from = t, corner = next_time_event; corner <= t_limit; from = corner, corner = system.next_time_event(corner)) {
+    if (corner_bends(from)) return {corner, std::numeric_limits<double>::infinity()};
+    if (++passed == kMostCornersPassed) return {std::numeric_limits<double>::infinity(), corner};
+  }
+  return {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
 }
 
 double Integrator::Impl::minimum_step() const { return std::max(options.min_step, time_resolution(t, options)); }
@@ -875,7 +886,9 @@ StepOutcome Integrator::Impl::step(double t_stop) {
   for (;;) {
     if (options.max_step > 0) h = std::min(h, options.max_step);
     h_planned = h;
-    corner = first_bending_corner(std::min(t_stop, t + 1.0001 * h));
+    const CornersAhead ahead = corners_ahead(std::min(t_stop, t + 1.0001 * h));
+    corner = ahead.bending;
+    h = std::min(h, ahead.last_passable - t);
     target = std::min(t_stop, corner);
     ends_at_target = t + h >= target || t + 1.0001 * h >= target;
     if (ends_at_target) h = target - t;

@@ -682,6 +682,26 @@ TEST_F(Cli, UicSaysWhichInitialConditionsTheCircuitOverrides) {
   EXPECT_EQ(quiet.err, "");
 }
 
+TEST_F(Cli, StopTimeBeyondTheSourcesDetailIsBadInput) {
+  // TSTOP 1e300 s resolves time near t = 0 to 1e276 s (1e-24 of the run), and at its end to
+  // 16 ulps of 1e300: neither a 10 ns edge nor a sine's 50 us steps survive. The buck's PULSE
+  // once hung in the first step (1e297 s long, across 1e302 corners).
+  const Result pulse = run(write("pulse.cir", "* pulse\nV1 g 0 PULSE(0 1 0 10n 10n 5u 10u)\nR1 g a 1k\nC1 a 0 1n\n.tran 1u 1m\n.end\n") +
+                           " -o " + path("o.csv") + " --tstop 1e300");
+  EXPECT_EQ(pulse.exit_code, 2) << pulse.err;
+  EXPECT_NE(pulse.err.find("the stop time 1e+300 s is too long for v1's detail: its corners at 0 s and 1e-08 s are closer "
+                           "than the time resolution the run has there (1e+276 s)"),
+            std::string::npos)
+      << pulse.err;
+  const Result sine = run(write("sine.cir", "* sine\nV1 g 0 SIN(0 1 1k)\nR1 g a 1k\nC1 a 0 1u\n.tran 1u 1m\n.end\n") + " -o " +
+                          path("o.csv") + " --tstop 1e300");
+  EXPECT_EQ(sine.exit_code, 2) << sine.err;
+  EXPECT_NE(sine.err.find("too long for v1's detail: the steps that resolve it (5e-05 s)"), std::string::npos) << sine.err;
+  // A stop time the detail survives is not refused.
+  const Result resolved = run(path("pulse.cir") + " -o " + path("o.csv") + " --tstop 20u");
+  EXPECT_EQ(resolved.exit_code, 0) << resolved.err;
+}
+
 TEST_F(Cli, EventLogQuotesLabelsWithCommas) {
   const std::string events = path("events.csv");
   const Result r = run(write("lab.cir", "* label\nV1 a 0 SIN(0 1 1k)\nB1 o 0 V={v(a,0) > 0.5 ? 1 : 0}\nR1 o 0 1\n"

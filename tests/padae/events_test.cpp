@@ -291,6 +291,42 @@ TEST(Events, StepsPassCornersThatCannotBendTheSolutionAndSampleTheGuardsThere) {
   }
 }
 
+// x' = -x beside a clock that nothing reads: g = z[1] = 0, with a corner every microsecond
+// declared to enter g's row alone, a million of them by t = 1.
+class UnreadClock : public SemiExplicitSystem {
+ public:
+  static constexpr double kPeriod = 1e-6;
+  UnreadClock() : SemiExplicitSystem({D, A}, {{0, 0}, {1, 1}}) {}
+  EvalStatus equations(double, const Vector& z, const Predicates&, Vector& out) override {
+    out[0] = -z[0];
+    out[1] = z[1];
+    return EvalStatus::ok;
+  }
+  double next_time_event(double t) const override {
+    double corner = (std::floor(t / kPeriod) + 1) * kPeriod;
+    return corner > t ? corner : corner + kPeriod;
+  }
+  bool time_event_rows(double, std::vector<int>& rows) const override {
+    rows.push_back(1);
+    return true;
+  }
+};
+
+TEST(Events, AStepPassesAtMostAThousandCorners) {
+  // Its work bounded: a step over astronomically many corners would not end (and a run stays
+  // interruptible between steps). The steps stay long all the same.
+  UnreadClock model;
+  Integrator integrator(model, precise());
+  ASSERT_TRUE(integrator.initialize(0.0, Vector::Unit(2, 0))) << integrator.failure().reason;
+  double longest_step = 0;
+  ASSERT_TRUE(run_until(integrator, 1.0, [&](const StepOutcome&) { longest_step = std::max(longest_step, integrator.step_size()); }))
+      << integrator.failure().reason;
+  EXPECT_LE(longest_step, 1000 * UnreadClock::kPeriod * (1 + 1e-9));
+  EXPECT_GE(longest_step, 999 * UnreadClock::kPeriod);
+  EXPECT_NEAR(integrator.state()[0], std::exp(-1.0), 1e-8);
+  EXPECT_EQ(integrator.statistics().time_events, 0);
+}
+
 // The same drive gating a decay: x' = p - x / 10 from x = 1, y = z[2] = 2 x. Closed form:
 // x = e^(-t/10), then relaxing towards 10 while p holds, from 1.105 to 1.135.
 class GatedDecay : public GateDriven {

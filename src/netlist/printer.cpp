@@ -1,5 +1,9 @@
-// The AST as netlist text. Values print as plain numbers or {expression}; expressions are fully
-// parenthesized, so that parsing the text gives the same AST back (positions aside).
+// The AST as netlist text. Values print as plain numbers or {expression}; expressions take the
+// parentheses the grammar's precedence needs and no more, so that parsing the text gives the
+// same AST back (positions aside) and nests no deeper than the text it came from did (a chain
+// of 100 unary minus signs, each parenthesized, exceeded the parser's nesting limit).
+#include <cmath>
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -29,6 +33,44 @@ const char* symbol(BinaryOperator op) {
 }
 
 std::string number(double value) { return fmt::format("{}", value); }
+
+// The grammar's levels, loosest first: an operand below the level its position asks for is
+// parenthesized.
+enum Level { conditional, logical_or, logical_and, equality, relational, additive, multiplicative, unary, power, primary };
+
+Level level_of(BinaryOperator op) {
+  switch (op) {
+    case BinaryOperator::add:
+    case BinaryOperator::subtract: return additive;
+    case BinaryOperator::multiply:
+    case BinaryOperator::divide: return multiplicative;
+    case BinaryOperator::power: return power;
+    case BinaryOperator::less:
+    case BinaryOperator::less_equal:
+    case BinaryOperator::greater:
+    case BinaryOperator::greater_equal: return relational;
+    case BinaryOperator::equal:
+    case BinaryOperator::not_equal: return equality;
+    case BinaryOperator::logical_and: return logical_and;
+    case BinaryOperator::logical_or: return logical_or;
+  }
+  return primary;
+}
+
+Level level_of(const Expression& e) {
+  if (auto* b = std::get_if<Binary>(&e.node)) return level_of(b->op);
+  if (std::holds_alternative<Unary>(e.node)) return unary;
+  if (std::holds_alternative<Conditional>(e.node)) return conditional;
+  // A negative number prints with its sign, which parses as a unary minus.
+  if (auto* n = std::get_if<Number>(&e.node); n && std::signbit(n->value)) return unary;
+  return primary;
+}
+
+// e in a position that asks for at least `least`.
+std::string print_at(const Expression& e, Level least) {
+  const std::string text = print(e);
+  return level_of(e) < least ? "(" + text + ")" : text;
+}
 
 // A value position: a number as is, anything else in braces.
 std::string value(const ExpressionPtr& expression) {
@@ -190,14 +232,18 @@ struct ExpressionPrinter {
   std::string operator()(const BranchCurrent& i) const { return fmt::format("i({})", i.element); }
   std::string operator()(const Time&) const { return "time"; }
   std::string operator()(const Unary& u) const {
-    return fmt::format("({}{})", u.op == UnaryOperator::negate ? "-" : "!", print(*u.operand));
+    return fmt::format("{}{}", u.op == UnaryOperator::negate ? "-" : "!", print_at(*u.operand, unary));
   }
+  // Left-associative levels take their own level on the left and the next on the right; power
+  // (right-associative) a primary on the left and a unary on the right, as the grammar does.
   std::string operator()(const Binary& b) const {
-    return fmt::format("({} {} {})", print(*b.left), symbol(b.op), print(*b.right));
+    const Level level = level_of(b.op);
+    const Level left = level == power ? primary : level;
+    const Level right = level == power ? unary : static_cast<Level>(level + 1);
+    return fmt::format("{} {} {}", print_at(*b.left, left), symbol(b.op), print_at(*b.right, right));
   }
   std::string operator()(const Conditional& c) const {
-    return fmt::format("({} ? {} : {})", print(*c.condition), print(*c.if_true),
-                       print(*c.if_false));
+    return fmt::format("{} ? {} : {}", print_at(*c.condition, logical_or), print(*c.if_true), print(*c.if_false));
   }
   std::string operator()(const Call& c) const {
     std::vector<std::string> arguments;

@@ -175,7 +175,7 @@ TEST(Elaborate, SubcircuitReferencesBecomeHierarchical) {
       "X1 a b stage gain=4\n");
   const auto& b1 = element(circuit, "x1.b1");
   EXPECT_TRUE(b1.behavioral_is_voltage);
-  EXPECT_EQ(netlist::print(*b1.expression), "((4 * v(x1.mid)) + i(x1.vs))");
+  EXPECT_EQ(netlist::print(*b1.expression), "4 * v(x1.mid) + i(x1.vs)");
   EXPECT_EQ(b1.nodes, (std::vector<std::string>{"b", "0"}));
   EXPECT_EQ(element(circuit, "x1.vs").nodes, (std::vector<std::string>{"a", "x1.mid"}));
   EXPECT_EQ(element(circuit, "x1.f1").controls, (std::vector<std::string>{"x1.vs"}));
@@ -224,13 +224,13 @@ TEST(Elaborate, SourcesAndControlledSources) {
   // POLY: a B source of SPICE's polynomial, zero coefficients left out.
   EXPECT_EQ(element(circuit, "e2").kind, ElementKind::behavioral);
   EXPECT_TRUE(element(circuit, "e2").behavioral_is_voltage);
-  EXPECT_EQ(netlist::print(*element(circuit, "e2").expression), "(1 + (3 * v(b,0)))");
+  EXPECT_EQ(netlist::print(*element(circuit, "e2").expression), "1 + 3 * v(b,0)");
   EXPECT_EQ(element(circuit, "h2").kind, ElementKind::behavioral);
-  EXPECT_EQ(netlist::print(*element(circuit, "h2").expression), "((2 * i(v1)) * i(v1))");
+  EXPECT_EQ(netlist::print(*element(circuit, "h2").expression), "2 * i(v1) * i(v1)");
   // vol=, cur=, value=: B sources too.
   EXPECT_EQ(element(circuit, "e3").kind, ElementKind::behavioral);
   EXPECT_TRUE(element(circuit, "e3").behavioral_is_voltage);
-  EXPECT_EQ(netlist::print(*element(circuit, "e3").expression), "(2 * v(a))");
+  EXPECT_EQ(netlist::print(*element(circuit, "e3").expression), "2 * v(a)");
   EXPECT_EQ(element(circuit, "g2").kind, ElementKind::behavioral);
   EXPECT_FALSE(element(circuit, "g2").behavioral_is_voltage);
   EXPECT_EQ(element(circuit, "g2").nodes, (std::vector<std::string>{"0", "u"}));
@@ -331,10 +331,10 @@ TEST(Elaborate, BehavioralExpressionsKeepConditions) {
   FlatCircuit circuit = load_data("expressions.cir");
   const auto& b1 = element(circuit, "b1");
   EXPECT_EQ(netlist::print(*b1.expression),
-            "((v(in) > 0.5) ? (2 * v(in,0)) : ((-(i(v1) ^ 2)) + time))");
+            "v(in) > 0.5 ? 2 * v(in,0) : -i(v1) ^ 2 + time");
   const auto& b2 = element(circuit, "b2");
   EXPECT_FALSE(b2.behavioral_is_voltage);
-  EXPECT_EQ(netlist::print(*b2.expression), "(limit(v(in), (-1), 1) * 2)");
+  EXPECT_EQ(netlist::print(*b2.expression), "limit(v(in), -1, 1) * 2");
   // fns = 1+0+0+2+2+0+1+0+0; more = 0+0+1+0+1+1+2+4-4; rest = -1+1+0+3+1+2
   EXPECT_DOUBLE_EQ(element(circuit, "r1").value, 6.0);
   EXPECT_EQ(element(circuit, "r2").value, 5.0 + 6.0);

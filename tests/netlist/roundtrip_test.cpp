@@ -43,6 +43,26 @@ TEST(RoundTrip, ALoneDollarIsNoName) {
   expect_round_trip("t\nR$1 a$b $c 1\n", "dollar.cir");
 }
 
+// Printed, an expression nests no deeper than its text did: a chain of 150 unary minus signs
+// (found by the fuzzer) printed as "(-(-(...)))" nested twice as deep and exceeded the parser's
+// limit; so did a sum of 300 terms as "((a + b) + c) ...". Operators keep their meaning where
+// precedence and associativity decide: (-x)^2, -(x^2), a - (b - c), 2^3^2, a ? b : c as an
+// operand.
+TEST(RoundTrip, ExpressionsPrintAsDeepAsTheyWereWritten) {
+  std::string minus(150, '-');
+  std::string sum = "1";
+  for (int k = 0; k < 300; ++k) sum += "+v(a)";
+  expect_round_trip("t\n.param k=" + minus + "2\nB1 a 0 V={" + sum + "}\n", "deep.cir");
+  netlist::Diagnostics diagnostics;
+  const auto parsed = netlist::parse_text(
+      "t\nB1 a 0 V={(-v(a))^2 + -v(a)^2 + (v(a) - (1 - v(b))) * 2^3^2 + (v(a) > 0 ? 1 : 2) * (1 + 2) / (3 * 4)}\n",
+      "precedence.cir", diagnostics);
+  ASSERT_FALSE(diagnostics.has_errors()) << diagnostics.to_string();
+  EXPECT_EQ(netlist::print(parsed),
+            "t\nb1 a 0 v={(-v(a)) ^ 2 + -v(a) ^ 2 + (v(a) - (1 - v(b))) * 2 ^ 3 ^ 2 + (v(a) > 0 ? 1 : 2) * (1 + 2) / (3 * 4)}\n"
+            ".end\n");
+}
+
 // A form feed or vertical tab inside a card separates words as a space does (found by the
 // fuzzer: ".subckt oute\v x y" took "oute\v" as the name, and its printed ".ends oute\v" lost
 // the trailing blank, closing a subcircuit of another name).
@@ -63,10 +83,10 @@ TEST(RoundTrip, PrintsTheExpectedText) {
       "t.cir", diagnostics);
   EXPECT_EQ(netlist::print(parsed),
             "title\n"
-            "r1 a b {(2 * (-(x ^ 2)))} tc=1\n"
-            "b1 o 0 i={(((v(a,b) >= 1) && (!(time < 1e-06))) ? u(v(a)) : 0)}\n"
+            "r1 a b {2 * -x ^ 2} tc=1\n"
+            "b1 o 0 i={v(a,b) >= 1 && !(time < 1e-06) ? u(v(a)) : 0}\n"
             "x1 a b sub params: w={k}\n"
-            ".param k={1.5} j={(k + 1)}\n"
+            ".param k={1.5} j={k + 1}\n"
             "v1 a 0 dc 1 ac 1 pwl(0 0 1e-09 1)\n"
             ".end\n");
 }

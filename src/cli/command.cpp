@@ -193,20 +193,21 @@ class Progress {
 // periods ask for (a sine's) at the stop time, are checked; empty when they are resolved.
 std::string unresolved_source_detail(const mna::Model& model, const padae::Options& options, double tstop) {
   constexpr int kCornersChecked = 1000;
+  const double resolution_at_end = padae::time_resolution(tstop, options);
   for (const auto& device : model.devices()) {
     if (!device->time_dependent()) continue;
-    if (const double step = device->resolution_step(); step < padae::time_resolution(tstop, options))
+    if (const double step = device->resolution_step(); step < resolution_at_end)
       return fmt::format("the stop time {:g} s is too long for {}'s detail: the steps that resolve it ({:.3g} s) are "
                          "below the time resolution the run has at its end ({:.3g} s)",
-                         tstop, device->name(), step, padae::time_resolution(tstop, options));
+                         tstop, device->name(), step, resolution_at_end);
     double previous = 0;
     for (int k = 0; k < kCornersChecked; ++k) {
       const double corner = device->next_time_event(previous);
       if (!(corner <= tstop)) break;
-      if (corner - previous < padae::time_resolution(corner, options))
+      if (const double resolution = padae::time_resolution(corner, options); corner - previous < resolution)
         return fmt::format("the stop time {:g} s is too long for {}'s detail: its corners at {:g} s and {:g} s are closer "
                            "than the time resolution the run has there ({:.3g} s)",
-                           tstop, device->name(), previous, corner, padae::time_resolution(corner, options));
+                           tstop, device->name(), previous, corner, resolution);
       previous = corner;
     }
   }

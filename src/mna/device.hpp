@@ -237,6 +237,12 @@ class Device {
     (void)x, (void)x_next;
     return 1;
   }
+  // padae::System::currents_converged for this device's currents; asked only of devices that
+  // limit Newton's steps.
+  virtual bool currents_converged(const Vector& x_before, const Vector& x_after, double rtol, double abstol) const {
+    (void)x_before, (void)x_after, (void)rtol, (void)abstol;
+    return true;
+  }
 
   // Whether the device depends on time (an independent source): only such devices are asked
   // for time events, forcing rows and resolution steps.

@@ -277,6 +277,12 @@ double Model::absolute_tolerance(int unknown, double) const {
   return tolerances_.voltage;
 }
 
+bool Model::currents_converged(const Vector& x_before, const Vector& x_after, double rtol) const {
+  for (const Device* d : limiting_devices_)
+    if (!d->currents_converged(x_before, x_after, rtol, tolerances_.current)) return false;
+  return true;
+}
+
 int Model::find_node(const std::string& name) const { return unknowns_.find_node(name); }
 
 const Device& Model::predicate_owner(int predicate) const {

@@ -38,6 +38,7 @@ class Model final : public padae::System {
   bool time_event_rows(double t, std::vector<int>& rows) const override;
   double absolute_tolerance(int unknown, double default_atol) const override;
   double newton_step_fraction(const Vector& x, const Vector& x_next) const override;
+  bool currents_converged(const Vector& x_before, const Vector& x_after, double rtol) const override;
   int kink_count() const override { return kink_count_; }
   void kinks(const Vector& x, Vector& out) const override;
   // Every device's charges from their values at x (ChargeReference).

@@ -31,14 +31,20 @@ void corrector_correction(const NewtonMatrix& newton, const CorrectorEquation& e
 
 enum class NewtonOutcome { converged, diverged, outside_domain, singular };
 
+// The corrections still to come, in units of the last one, before a contraction rate is measured
+// (IDA's initial convergence factor).
+constexpr double kUnmeasuredConvergenceFactor = 20;
+
 // Solves from x (overwritten by the solution, or by the last iterate on failure). Converged: a
-// full correction within `tolerance` in the max norm weighted by inverse_weight (also when the
-// corrections stall within one tolerance unit: the round-off floor). branch_sign: the sign of
+// full correction within `tolerance` in the max norm weighted by inverse_weight, as are the
+// corrections its contraction says are still to come (also when the corrections stall within one
+// tolerance unit: the round-off floor), with the model's nonlinear currents converged on it
+// within rtol (System::currents_converged). branch_sign: the sign of
 // det J on the branch sought (a step's corrector knows it from the step's start, which a
 // predictor can overshoot past a fold); 0 takes the start's. Each iteration counts in
 // statistics.newton_iterations.
 NewtonOutcome solve_damped(NewtonMatrix& newton, Statistics& statistics, const CorrectorEquation& equation,
-                           const Vector& inverse_weight, double tolerance, int max_iterations, Vector& x,
-                           int branch_sign = 0);
+                           const Vector& inverse_weight, double tolerance, double rtol, int max_iterations,
+                           Vector& x, int branch_sign = 0);
 
 }  // namespace padae

@@ -98,13 +98,15 @@ std::optional<Vector> DenseOutput::solve_from(const Vector& x_guess, double t, c
     if (rate > kFastContraction) break;
     // The corrections still to come, from the contraction so far (IDA's test); the first
     // correction, with no rate yet, counts as it is.
-    if ((iteration == 0 ? norm : rate / (1 - rate) * norm) <= kConvergedNorm) return x;
+    if ((iteration == 0 ? norm : rate / (1 - rate) * norm) <= kConvergedNorm &&
+        newton_.currents_converged(x + delta_, x, options_.rtol))
+      return x;
     if (newton_.evaluate(t, x, p) != EvalStatus::ok) break;
     previous_norm = norm;
   }
   // Otherwise damped Newton from the guess.
   x = x_guess;
-  if (solve_damped(newton_, statistics_, equation, inverse_weight_, kConvergedNorm, kMaxIterations, x) !=
+  if (solve_damped(newton_, statistics_, equation, inverse_weight_, kConvergedNorm, options_.rtol, kMaxIterations, x) !=
       NewtonOutcome::converged)
     return std::nullopt;
   return x;

@@ -376,12 +376,13 @@ struct Integrator::Impl {
   bool have_matrix = false;
   double cj_of_matrix = 0;
   long step_of_matrix = 0;
-  double convergence_factor = 20;
+  double convergence_factor = kUnmeasuredConvergenceFactor;
   bool newton_was_slow = false;  // the last attempt's modified Newton (kSlowNewtonIterations)
 
   Vector inverse_weight_x, inverse_weight_q, charge_weight, charge_tolerance;
   Vector peak_magnitude, error_scale;  // largest |x| so far; the magnitude rtol applies to
   Vector x_predicted, q_predicted, q_derivative_predicted, x_new, q_new, delta, residual;
+  Vector next_iterate;  // where correct()'s confirming correction would take x_new
   double newton_start_fraction = 1;  // how far toward x_predicted Newton starts (predict())
   Vector correction_x, correction_q;
   Vector previous_correction_x;  // the step before's correction_x (step_vouches_for_polynomial)
@@ -573,7 +574,7 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
   else x_new = x_predicted;
   const CorrectorEquation equation{t_new, cj, q_predicted, q_derivative_predicted, x_predicted, p};
   if (mode == Newton::full) {
-    const NewtonOutcome outcome = solve_damped(newton, statistics, equation, inverse_weight_x, kNewtonTolerance,
+    const NewtonOutcome outcome = solve_damped(newton, statistics, equation, inverse_weight_x, kNewtonTolerance, options.rtol,
                                                kMaxFullNewtonIterations, x_new, sign_on_branch(t_new));
     hold_matrix();
     have_matrix = outcome != NewtonOutcome::singular;
@@ -625,10 +626,17 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
     }
     // A convergence judged from a remembered rate must really hold: the next correction, on a
     // matrix that can judge it, must be within the tolerance too (a junction turning off inside
-    // the step breaks the linearization an earlier step's rate was measured on). A matrix that
-    // far from the one held may be across a fold from the step's start (damped_newton.hpp):
-    // such a solution is refused.
+    // the step breaks the linearization an earlier step's rate was measured on), and so must the
+    // model's nonlinear currents along it (System::currents_converged: a node within its
+    // tolerance can be many N VT from a junction's solution). A matrix that far from the one held
+    // may be across a fold from the step's start (damped_newton.hpp): such a solution is refused.
     auto confirming = newton.factor(t_new, x_new, p, cj, kConfirmingDrift);
+    // The correction the matrix at x_new would make is at most `amplification` times delta.
+    double amplification = 1;
+    const auto currents_settled = [&] {
+      next_iterate = x_new - amplification * delta;
+      return newton.currents_converged(x_new, next_iterate, options.rtol);
+    };
     if (confirming == NewtonMatrix::Outcome::kept) {
       newton_correction(equation);
       // Row by row the held matrix can look close where it is far along the correction
@@ -641,8 +649,12 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
         newton.kept_mismatch(delta, cj_of_matrix, kept_mismatch);
         const double correction = weighted_max_norm(delta, inverse_weight_x);
         const double ratio = correction > 0 ? weighted_max_norm(kept_mismatch, inverse_weight_x) / correction : 0;
-        if (ratio >= kConfirmingMismatch && (ratio >= 1 || correction > kNewtonTolerance * (1 - ratio)))
+        amplification = ratio < 1 ? 1 / (1 - ratio) : std::numeric_limits<double>::infinity();
+        const bool held_confirms = ratio < kConfirmingMismatch || correction * amplification <= kNewtonTolerance;
+        if (!held_confirms || !currents_settled()) {
           confirming = newton.factor(t_new, x_new, p, cj);
+          amplification = 1;
+        }
       }
     }
     if (confirming == NewtonMatrix::Outcome::outside_domain) return NewtonOutcome::outside_domain;
@@ -656,8 +668,8 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
       hold_matrix();
       newton_correction(equation);
     }
-    if (weighted_max_norm(delta, inverse_weight_x) <= kNewtonTolerance) break;
-    convergence_factor = 20;
+    if (weighted_max_norm(delta, inverse_weight_x) <= kNewtonTolerance && currents_settled()) break;
+    convergence_factor = kUnmeasuredConvergenceFactor;
     if (m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;
     // The rate is measured afresh from the next correction on: it may be on another matrix.
     m_first = m + 1;
@@ -699,7 +711,7 @@ void Integrator::Impl::hold_matrix() {
   have_matrix = true;
   cj_of_matrix = cj;
   step_of_matrix = statistics.steps;
-  convergence_factor = 20;
+  convergence_factor = kUnmeasuredConvergenceFactor;
 }
 
 // delta = J^-1 r(x_new), r the corrector's residual at the last evaluation (which was at x_new).

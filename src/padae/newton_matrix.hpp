@@ -48,6 +48,10 @@ class NewtonMatrix {
   double step_fraction(const Vector& x, const Vector& x_next) const {
     return system_.newton_step_fraction(x, x_next);
   }
+  // System::currents_converged.
+  bool currents_converged(const Vector& x_before, const Vector& x_after, double rtol) const {
+    return system_.currents_converged(x_before, x_after, rtol);
+  }
   const Load& load() const { return load_; }
   // The first row whose f or q in load() is not finite, -1 if none: the equation that names
   // the element a model evaluation outside its domain came from.

@@ -124,6 +124,15 @@ class System {
     (void)x, (void)x_next;
     return 1;
   }
+  // SPICE's device convergence test, on Newton's last correction from x_before to x_after:
+  // whether every current the model knows to be nonlinear (a junction's) is at x_after within
+  // rtol (of the larger) plus its absolute tolerance of its linearization at x_before. Unknowns
+  // within their tolerances can leave an exponential far from its solution: at rtol 2e-2 an 18 V
+  // node's tolerance is 9 N VT, a factor of 8000 in a junction's current.
+  virtual bool currents_converged(const Vector& x_before, const Vector& x_after, double rtol) const {
+    (void)x_before, (void)x_after, (void)rtol;
+    return true;
+  }
 
   // Only changes of q enter the equations, so q may be measured from any reference. A row sums
   // the charges of the elements at a node, and rounds to the largest: a junction holding 1e-4 C

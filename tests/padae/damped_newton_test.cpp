@@ -57,7 +57,7 @@ Solve solve(Function g, Function g_derivative, double y_start, double tolerance 
   const CorrectorEquation equation{0.0, 1.0, zero, zero, held, p};
   Vector y = held;
   const Vector inverse_weight = Vector::Constant(1, 1 / tolerance);
-  const NewtonOutcome outcome = solve_damped(newton, statistics, equation, inverse_weight, 0.33, 30, y);
+  const NewtonOutcome outcome = solve_damped(newton, statistics, equation, inverse_weight, 0.33, 1e-3, 30, y);
   return {outcome, y[0], system.evaluations};
 }
 

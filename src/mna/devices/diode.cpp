@@ -88,6 +88,11 @@ class Diode final : public Device {
     return fraction;
   }
 
+  bool currents_converged(const Vector& x_before, const Vector& x_after, double rtol, double abstol) const override {
+    return junction::current_converged([this](double v) { return junction_current(v); }, junction_voltage(x_before),
+                                       junction_voltage(x_after), rtol, abstol);
+  }
+
   void edges(std::vector<Edge>& out) const override {
     out.push_back({junction_, cathode_, Connection::conductive, name()});
     if (series_resistance_ > 0) out.push_back({anode_, junction_, Connection::conductive, name()});

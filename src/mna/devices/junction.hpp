@@ -66,6 +66,15 @@ inline double step_fraction(double v, double v_next, double vt, double v_critica
   return (limited - v) / (v_next - v);
 }
 
+// SPICE's device convergence test (DIOconvTest): the current at v_after against its linearization
+// at v_before, current(v) giving the current and its slope.
+template <class Current>
+bool current_converged(Current current, double v_before, double v_after, double rtol, double abstol) {
+  const auto [before, slope] = current(v_before);
+  const double predicted = before + slope * (v_after - v_before), after = current(v_after).first;
+  return std::abs(after - predicted) <= rtol * std::max(std::abs(predicted), std::abs(after)) + abstol;
+}
+
 // The energy in a junction's charge at voltage v: the integral of u C(u) du from 0 to v
 // (composite Simpson; only evaluated at events, for the jump energy balance).
 template <class Capacitance>

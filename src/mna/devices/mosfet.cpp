@@ -194,6 +194,16 @@ class Mosfet final : public Device {
     }
     return fraction;
   }
+  bool currents_converged(const Vector& x_before, const Vector& x_after, double rtol, double abstol) const override {
+    for (const Junction* j : {&drain_, &source_}) {
+      if (j->saturation == 0) continue;
+      const auto current = [&](double v) { return junction_current(*j, v); };
+      if (!junction::current_converged(current, type_ * (value(x_before, bulk_) - value(x_before, j->node)),
+                                       type_ * (value(x_after, bulk_) - value(x_after, j->node)), rtol, abstol))
+        return false;
+    }
+    return true;
+  }
 
   // The junctions' gmin always conducts; the channel only when on, the gate only through its
   // overlap capacitances.

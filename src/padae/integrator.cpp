@@ -155,6 +155,7 @@ struct Integrator::Impl {
   // The error the test measured, in tolerances, into `error`; error_k and error_k_minus_1 are
   // the estimates at orders k and k - 1 that choose the next order.
   bool error_test(double& error, double& error_k, double& error_k_minus_1, int& order_new);
+  bool kink_crossed() const;
   bool kink_spoils_derivative();
   // The first step after a (re)start is the trapezoidal rule from the re-initialization's q'
   // (unless the order is held at 1, or a fast mode is left to the integration); its error is
@@ -308,6 +309,9 @@ struct Integrator::Impl {
   Vector kink_response, kink_weight;  // kink_spoils_derivative()'s
   // A step retaken at order 1 after a kink: Newton starts from the attempt's solution.
   bool retaking_at_kink = false;
+  // Accepted steps since the last that crossed a kink (kMaxOrder after a restart): a formula
+  // whose history reached back across it would overshoot the kink as the retaken step's would.
+  int steps_past_kink = kMaxOrder;
   Vector retake_start;
   double next_time_event = std::numeric_limits<double>::infinity();  // the first corner after t
   // Per row: whether a corner in its forcing can bend the solution, i.e. the row shares a block
@@ -762,15 +766,21 @@ bool Integrator::Impl::error_test(double& error, double& error_k, double& error_
 bool Integrator::Impl::kink_spoils_derivative() {
   if (kink_count == 0) return false;
   system.kinks(x_new, kinks_new);
-  if (order == 1 || trapezoidal_step()) return false;
-  bool crossed = false;
-  for (int k = 0; k < kink_count; ++k) crossed = crossed || (kinks_new[k] > 0) != (kinks_now[k] > 0);
-  if (!crossed) return false;
+  // Order k's formula reaches back to the point k - 1 steps before the step's start.
+  const bool spans_kink = kink_crossed() || steps_past_kink < order - 1;
+  if (order == 1 || trapezoidal_step() || !spans_kink) return false;
   kink_response = (cj * error_coefficient) * correction_q;
   newton.solve(kink_response);
   kink_weight = algebraic_indicator.cwiseQuotient(options.rtol * padae::error_scale(x_new, peak_magnitude, 1.0) +
                                                   absolute_tolerance);
   return weighted_norm(kink_response, kink_weight, options.norm) > 1;
+}
+
+// Whether the attempt's x_new lies across a kink from x (kinks_new against kinks_now).
+bool Integrator::Impl::kink_crossed() const {
+  for (int k = 0; k < kink_count; ++k)
+    if ((kinks_new[k] > 0) != (kinks_now[k] > 0)) return true;
+  return false;
 }
 
 // The next step from the local error estimate of order error_order, and from the growth of the
@@ -810,12 +820,15 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
   const double growth = std::min(growth_now, last_accepted.growth);
   last_accepted = {order_used, error_k, h_used, growth_now};
   if (order_new == order - 1 || order >= std::min(options.max_order, kStartupOrder)) startup_phase = false;
+  steps_past_kink = kink_count > 0 && kink_crossed() ? 0 : std::min(steps_past_kink + 1, kMaxOrder);
+  // Order k + 1 interpolates k + 2 points, back to the one k steps before the step's start.
+  const bool history_past_kink = steps_past_kink >= order;
 
   const double h_max = options.max_step > 0 ? options.max_step : std::numeric_limits<double>::infinity();
   // IDA's start-up: raise the order and double the step until a step fails or the order
   // drops; here only up to kStartupOrder.
   if (startup_phase) {
-    order = std::min(order + 1, options.max_order);
+    if (history_past_kink) order = std::min(order + 1, options.max_order);
     h = std::min(2 * h, h_max);
   } else if (options.method == Method::trapezoidal) {
     // Back to the trapezoidal order after any backward-Euler step (repeated failures).
@@ -827,7 +840,7 @@ void Integrator::Impl::complete_step(double error_k, double error_k_minus_1, int
     double error_k_plus_1 = 0;
     if (order_new == order - 1) {
       action = lower;
-    } else if (order == options.max_order || order + 1 >= constant_steps || order_change == 1) {
+    } else if (order == options.max_order || order + 1 >= constant_steps || order_change == 1 || !history_past_kink) {
       action = maintain;
     } else {
       Vector above = correction_q - phi_q[order + 1];
@@ -1616,6 +1629,7 @@ void Integrator::Impl::restart(double t_at, const ConsistentState& consistent) {
   fast_mode_left = consistent.fast_mode_left;
   virtual_point_in_history = false;
   last_accepted = {};
+  steps_past_kink = kMaxOrder;
   h_used = 0;
   have_matrix = false;  // re-initialization factored its own matrices
   psi[0] = h;

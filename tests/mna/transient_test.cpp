@@ -745,7 +745,7 @@ TEST(Start, ShockleyDiodeOperatingPointSatisfiesItsEquation) {
 // blocked junction converged, and v(sw) fell to -32 kV when the steps' current snapped back.
 // Once the diode blocks, ROFF alone holds the node, at Vin - L di/dt: BDF2's derivative across
 // the turn-off took it to -0.86 V at rtol 1e-3 and 1.55 V at 1e-4 (the step is now retaken at
-// order 1, System::kinks).
+// order 1, System::kinks, also where the formula's history reaches back across the turn-off).
 // From rtol 1.5e-2 up, Newton took states 2 V short of the junction's turn-off as converged (the
 // 18 V node's tolerance is 9 N VT): i(l1) -12 mA against the junction's +24 mA, then -14 kV at
 // v(sw) as ROFF took that current (System::currents_converged now checks the junction's current).

@@ -98,9 +98,10 @@ std::optional<Vector> DenseOutput::solve_from(const Vector& x_guess, double t, c
     if (rate > kFastContraction) break;
     // The corrections still to come, from the contraction so far (IDA's test); the first
     // correction, with no rate yet, counts as it is.
-    if ((iteration == 0 ? norm : rate / (1 - rate) * norm) <= kConvergedNorm &&
-        newton_.currents_converged(x + delta_, x, options_.rtol))
-      return x;
+    if ((iteration == 0 ? norm : rate / (1 - rate) * norm) <= kConvergedNorm) {
+      previous_iterate_.noalias() = x + delta_;
+      if (newton_.currents_converged(previous_iterate_, x, options_.rtol)) return x;
+    }
     if (newton_.evaluate(t, x, p) != EvalStatus::ok) break;
     previous_norm = norm;
   }

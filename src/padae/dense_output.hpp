@@ -54,6 +54,7 @@ class DenseOutput {
   const Options& options_;
   const Vector& absolute_tolerance_;
   Vector residual_, delta_, inverse_weight_, shifted_start_;
+  Vector previous_iterate_;  // solve_from()'s, for System::currents_converged
   // The last solutions inside step number `step`, newest first: their distances from S.
   static constexpr int kExtrapolationPoints = 3;
   struct Solutions {

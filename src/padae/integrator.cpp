@@ -637,6 +637,7 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
     auto confirming = newton.factor(t_new, x_new, p, cj, kConfirmingDrift);
     // The correction the matrix at x_new would make is at most `amplification` times delta.
     double amplification = 1;
+    bool settled = false;  // currents_settled() held for this delta
     const auto currents_settled = [&] {
       next_iterate = x_new - amplification * delta;
       return newton.currents_converged(x_new, next_iterate, options.rtol);
@@ -655,7 +656,8 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
         const double ratio = correction > 0 ? weighted_max_norm(kept_mismatch, inverse_weight_x) / correction : 0;
         amplification = ratio < 1 ? 1 / (1 - ratio) : std::numeric_limits<double>::infinity();
         const bool held_confirms = ratio < kConfirmingMismatch || correction * amplification <= kNewtonTolerance;
-        if (!held_confirms || !currents_settled()) {
+        settled = held_confirms && currents_settled();
+        if (!settled) {
           confirming = newton.factor(t_new, x_new, p, cj);
           amplification = 1;
         }
@@ -672,7 +674,7 @@ NewtonOutcome Integrator::Impl::correct(double t_new, Newton mode) {
       hold_matrix();
       newton_correction(equation);
     }
-    if (weighted_max_norm(delta, inverse_weight_x) <= kNewtonTolerance && currents_settled()) break;
+    if (weighted_max_norm(delta, inverse_weight_x) <= kNewtonTolerance && (settled || currents_settled())) break;
     convergence_factor = kUnmeasuredConvergenceFactor;
     if (m + 1 >= kMaxNewtonIterations) return NewtonOutcome::diverged;
     // The rate is measured afresh from the next correction on: it may be on another matrix.

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "padae/damped_newton.hpp"
 #include "padae/norms.hpp"
 
 namespace padae {
@@ -32,6 +33,11 @@ Reinitializer::Reinitializer(System& system, NewtonMatrix& newton, Statistics& s
       options_(options),
       absolute_tolerance_(absolute_tolerance),
       peak_magnitude_(peak_magnitude) {}
+
+// The tolerance never asks for less than round-off in x.
+void Reinitializer::newton_weights(const Vector& x, Vector& inverse_weight) const {
+  inverse_weight = ((options_.rtol + 100 * kEps) * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
+}
 
 bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_start,
                                    const Vector& held, const Predicates& p_from,
@@ -76,9 +82,8 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
     // in part, and shows the matrix's linearization was far off: refactored at the next iterate.
     const double fraction = newton_.step_fraction(x, x - delta);
     x -= fraction * delta;
-    // The tolerance never asks for less than round-off in x.
     Vector& inverse_weight = inverse_weight_;
-    inverse_weight = ((options_.rtol + 100 * kEps) * x.cwiseAbs() + absolute_tolerance_).cwiseInverse();
+    newton_weights(x, inverse_weight);
     int worst = -1;
     const double norm = weighted_max_norm(delta, inverse_weight, &worst);
     if (!std::isfinite(norm)) {
@@ -117,12 +122,31 @@ bool Reinitializer::backward_euler(double t_eval, double h, const Vector& q_star
   return false;
 }
 
+bool Reinitializer::damped_backward_euler(double t_eval, double h, const Vector& q_start,
+                                          const Vector& held, const Predicates& p, Vector& x) {
+  const Vector no_derivative = Vector::Zero(x.size());
+  const CorrectorEquation equation{t_eval, 1 / h, q_start, no_derivative, held, p};
+  newton_weights(x, inverse_weight_);
+  return solve_damped(newton_, statistics_, equation, inverse_weight_, kConvergedNorm, options_.rtol, kMaxIterations,
+                      x) == NewtonOutcome::converged;
+}
+
 bool Reinitializer::backward_euler_with_continuation(double t_eval, double h,
                                                      const Vector& q_start,
                                                      const Predicates& p_from,
                                                      const Predicates& p_to, Vector& x) {
   const Vector guess = x;
   if (backward_euler(t_eval, h, q_start, guess, p_from, p_to, 1.0, x)) return true;
+  // The plain iteration can cycle where a junction's limiting and its turn-off alternate (a
+  // flyback's secondary diode, reverse-saturated, as the switch turns on: v(sec) between
+  // -0.2 V and 9.8 V, 100 iterations); damped Newton's monotonicity test breaks the cycle.
+  // Its failure leaves the plain iteration's reason standing.
+  const std::string plain_failure = failure_reason_;
+  const int plain_unknown = failure_unknown_;
+  x = guess;
+  if (damped_backward_euler(t_eval, h, q_start, guess, p_to, x)) return true;
+  failure_reason_ = plain_failure;
+  failure_unknown_ = plain_unknown;
   if (p_from == p_to) return false;
   // Continuation in a parameter (the paper's remedy): from the old mode, whose solution is
   // near x, to the new one.

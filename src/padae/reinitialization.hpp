@@ -18,8 +18,9 @@
 // The extrapolation keeps the charges the steps start from (to within the error test's
 // tolerance); where it does not, a mode faster than the steps moved them (the steps see it
 // settled), and shorter steps, or else the vanishing step's state, leave that mode to the
-// integration. When Newton fails on the new mode, the paper's continuation in a parameter blends the
-// residuals of the old and the new mode.
+// integration. When Newton fails on the new mode, damped Newton takes the same step; when that
+// fails too, the paper's continuation in a parameter blends the residuals of the old and the new
+// mode.
 #pragma once
 
 #include <initializer_list>
@@ -77,6 +78,11 @@ class Reinitializer {
   // (1 - lambda) p_from + lambda p_to, evaluated at t_eval; x holds the guess and the result.
   bool backward_euler(double t_eval, double h, const Vector& q_start, const Vector& held,
                       const Predicates& p_from, const Predicates& p_to, double lambda, Vector& x);
+  // The same step for mode p alone, by damped Newton (padae/damped_newton.hpp).
+  bool damped_backward_euler(double t_eval, double h, const Vector& q_start, const Vector& held,
+                             const Predicates& p, Vector& x);
+  // Newton's weights at x: each unknown's tolerance, never below its round-off.
+  void newton_weights(const Vector& x, Vector& inverse_weight) const;
   bool backward_euler_with_continuation(double t_eval, double h, const Vector& q_start,
                                         const Predicates& p_from, const Predicates& p_to,
                                         Vector& x);
@@ -100,7 +106,7 @@ class Reinitializer {
   std::optional<Vector> stalled_state_;
   std::optional<Vector> outside_domain_state_;
   std::optional<Vector> singular_state_;
-  Vector delta_, inverse_weight_;  // backward_euler()'s Newton correction and weights
+  Vector delta_, inverse_weight_;  // Newton's correction and weights
 };
 
 }  // namespace padae

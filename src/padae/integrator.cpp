@@ -984,7 +984,13 @@ StepOutcome Integrator::Impl::step(double t_stop) {
                               : "Newton's method does not converge however small the step";
         return fail(t, why + " at t = " + format_number(t, 17), blamed);
       }
+      // And at order 1, as SPICE retries: backward Euler's corrector leans on no derivative from
+      // the history. The trapezoidal rule's does (q' at the step's start), and where that is a
+      // ringing algebraic unknown's (a flyback's blocked secondary, v(sec) swinging +-200 V from
+      // step to step) no step however short converged at order 2.
       h *= 0.25;
+      order = 1;
+      startup_phase = false;
       have_matrix = have_matrix && correction != NewtonOutcome::singular;
       continue;
     }

@@ -587,7 +587,9 @@ TEST_F(Cli, FloatingCentreTappedSecondaryRunsAndMatchesNgspice) {
 // circuits/flyback.cir at loose tolerances. As the switch turns on, the secondary's diode sits
 // reverse-saturated (v(sec) fixed only through its 1 nA) and must start conducting: Newton's
 // iteration on the re-initialization's settling step cycled between v(sec) = -0.2 V and 9.8 V
-// and the run stopped at the first turn-on past 140 us at every rtol from 5e-3 up.
+// and the run stopped at the first turn-on past 140 us at every rtol from 5e-3 up. With the
+// trapezoidal rule the blocked secondary's v(sec) rings by +-200 V from step to step, and at
+// rtol 2e-2 no step converged at order 2 from that ringing derivative (t = 54.6 us).
 TEST_F(Cli, FlybackAtLooseTolerancesRunsThroughItsTurnOnsAndMatchesNgspice) {
   if (std::system("command -v ngspice > /dev/null 2>&1") != 0) GTEST_SKIP() << "ngspice not installed";
   const std::string circuit =
@@ -603,18 +605,21 @@ TEST_F(Cli, FlybackAtLooseTolerancesRunsThroughItsTurnOnsAndMatchesNgspice) {
   double drain_peak = 0;
   for (const auto& row : reference) drain_peak = std::max(drain_peak, row[2]);
   const std::string netlist = write("flyback.cir", "* flyback\n" + circuit + ".tran 50n 300u\n.end\n");
-  for (const char* rtol : {"5e-2", "2e-2", "1e-2", "5e-3"}) {
-    const std::string csv_path = path(std::string("flyback") + rtol + ".csv");
-    const Result r = run(netlist + " --rtol " + rtol + " --probe 'v(out),v(drain)' -q -o " + csv_path);
-    ASSERT_EQ(r.exit_code, 0) << rtol << ": " << r.err;
-    const Csv csv = parse_csv(read(csv_path));
-    ASSERT_FALSE(csv.rows.empty());
-    EXPECT_NEAR(csv.rows.back()[0], 300e-6, 1e-15);
-    // The global error of these tolerances: 0.8 ... 1.0 % on v(out) after 30 periods.
-    EXPECT_NEAR(csv.rows.back()[csv.column("v(out)")], v_out, 1.5e-2 * v_out) << rtol;
-    double peak = 0;
-    for (const auto& row : csv.rows) peak = std::max(peak, row[csv.column("v(drain)")]);
-    EXPECT_NEAR(peak, drain_peak, 1e-2 * drain_peak) << rtol;  // the leakage inductance's spike, 2.1 kV
+  for (const std::string method : {"gear", "trap"}) {
+    for (const std::string rtol : {"5e-2", "2e-2", "1e-2", "5e-3"}) {
+      const std::string csv_path = path("flyback" + method + rtol + ".csv");
+      const Result r = run(netlist + " --method " + method + " --rtol " + rtol + " --probe 'v(out),v(drain)' -q -o " + csv_path);
+      ASSERT_EQ(r.exit_code, 0) << method << " " << rtol << ": " << r.err;
+      const Csv csv = parse_csv(read(csv_path));
+      ASSERT_FALSE(csv.rows.empty());
+      EXPECT_NEAR(csv.rows.back()[0], 300e-6, 1e-15);
+      // The global error of these tolerances: up to 1.0 % on v(out) after 30 periods.
+      EXPECT_NEAR(csv.rows.back()[csv.column("v(out)")], v_out, 1.5e-2 * v_out) << method << " " << rtol;
+      double peak = 0;
+      for (const auto& row : csv.rows) peak = std::max(peak, row[csv.column("v(drain)")]);
+      // The leakage inductance's spike, 2.1 kV.
+      EXPECT_NEAR(peak, drain_peak, 1e-2 * drain_peak) << method << " " << rtol;
+    }
   }
 }
 

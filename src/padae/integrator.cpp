@@ -984,13 +984,16 @@ StepOutcome Integrator::Impl::step(double t_stop) {
                               : "Newton's method does not converge however small the step";
         return fail(t, why + " at t = " + format_number(t, 17), blamed);
       }
-      // And at order 1, as SPICE retries: backward Euler's corrector leans on no derivative from
-      // the history. The trapezoidal rule's does (q' at the step's start), and where that is a
+      // The trapezoidal rule's corrector leans on q' at the step's start, and where that is a
       // ringing algebraic unknown's (a flyback's blocked secondary, v(sec) swinging +-200 V from
-      // step to step) no step however short converged at order 2.
+      // step to step) no step however short converged: retried at order 1, backward Euler, as
+      // SPICE retries. BDF's correctors lean on no derivative; dropping their order too (SPICE
+      // does) cost an LLC converter 22 % more factorizations at rtol 1e-8.
       h *= 0.25;
-      order = 1;
-      startup_phase = false;
+      if (trapezoidal_method_step()) {
+        order = 1;
+        startup_phase = false;
+      }
       have_matrix = have_matrix && correction != NewtonOutcome::singular;
       continue;
     }

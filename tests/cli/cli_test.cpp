@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -24,6 +25,42 @@ struct Result {
   int exit_code;
   std::string out, err;
 };
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<double>> rows;
+  int column(const std::string& name) const {
+    for (std::size_t k = 0; k < header.size(); ++k)
+      if (header[k] == name) return static_cast<int>(k);
+    return -1;
+  }
+};
+
+Csv parse_csv(const std::string& text) {
+  Csv csv;
+  std::istringstream lines(text);
+  std::string line;
+  bool first = true;
+  while (std::getline(lines, line)) {
+    // Cells are separated by commas; a quoted cell may contain commas ("v(a,b)").
+    std::vector<std::string> cells(1);
+    bool quoted = false;
+    for (char c : line) {
+      if (c == '"') quoted = !quoted;
+      else if (c == ',' && !quoted) cells.emplace_back();
+      else cells.back() += c;
+    }
+    if (first) {
+      csv.header = cells;
+      first = false;
+      continue;
+    }
+    std::vector<double> row;
+    for (const auto& c : cells) row.push_back(std::strtod(c.c_str(), nullptr));
+    csv.rows.push_back(row);
+  }
+  return csv;
+}
 
 class Cli : public ::testing::Test {
  protected:
@@ -75,45 +112,33 @@ class Cli : public ::testing::Test {
     const int status = std::system((std::string(PADSIM_EXECUTABLE) + " " + arguments + " > " + out + " 2> " + err).c_str());
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read(out), read(err)};
   }
+  struct Waveform {
+    Result result;
+    Csv csv;
+  };
+  // padsim `arguments` with its waveform written to csv_path and read back. None, and a failure
+  // recorded under `label`, unless it exits 0 with rows up to t_stop.
+  std::optional<Waveform> run_to(double t_stop, const std::string& arguments, const std::string& csv_path,
+                                 const std::string& label) {
+    Waveform waveform{run(arguments + " -o " + csv_path), {}};
+    if (waveform.result.exit_code != 0) {
+      ADD_FAILURE() << label << ": exit code " << waveform.result.exit_code << ": " << waveform.result.err;
+      return std::nullopt;
+    }
+    waveform.csv = parse_csv(read(csv_path));
+    if (waveform.csv.rows.empty()) {
+      ADD_FAILURE() << label << ": no rows";
+      return std::nullopt;
+    }
+    if (std::abs(waveform.csv.rows.back()[0] - t_stop) > 1e-15) {
+      ADD_FAILURE() << label << ": the rows end at " << waveform.csv.rows.back()[0] << ", not at " << t_stop;
+      return std::nullopt;
+    }
+    return waveform;
+  }
 
   fs::path dir_;
 };
-
-struct Csv {
-  std::vector<std::string> header;
-  std::vector<std::vector<double>> rows;
-  int column(const std::string& name) const {
-    for (std::size_t k = 0; k < header.size(); ++k)
-      if (header[k] == name) return static_cast<int>(k);
-    return -1;
-  }
-};
-
-Csv parse_csv(const std::string& text) {
-  Csv csv;
-  std::istringstream lines(text);
-  std::string line;
-  bool first = true;
-  while (std::getline(lines, line)) {
-    // Cells are separated by commas; a quoted cell may contain commas ("v(a,b)").
-    std::vector<std::string> cells(1);
-    bool quoted = false;
-    for (char c : line) {
-      if (c == '"') quoted = !quoted;
-      else if (c == ',' && !quoted) cells.emplace_back();
-      else cells.back() += c;
-    }
-    if (first) {
-      csv.header = cells;
-      first = false;
-      continue;
-    }
-    std::vector<double> row;
-    for (const auto& c : cells) row.push_back(std::strtod(c.c_str(), nullptr));
-    csv.rows.push_back(row);
-  }
-  return csv;
-}
 
 const char* rc_netlist =
     "* RC charging from a 1 V source\n"
@@ -572,11 +597,9 @@ TEST_F(Cli, FloatingCentreTappedSecondaryRunsAndMatchesNgspice) {
   ASSERT_FALSE(reference.empty());
   ASSERT_NEAR(reference.back()[0], 20e-6, 1e-12);
   const double v_out = reference.back()[1];
-  const Result r = run(write("pd.cir", "* secondary\n" + circuit + ".end\n") + " --probe 'v(out),v(ct)' -o " + csv_path);
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const Csv csv = parse_csv(read(csv_path));
-  ASSERT_FALSE(csv.rows.empty());
-  EXPECT_NEAR(csv.rows.back()[0], 20e-6, 1e-15);
+  const auto padsim = run_to(20e-6, write("pd.cir", "* secondary\n" + circuit + ".end\n") + " --probe 'v(out),v(ct)'", csv_path, "padsim");
+  ASSERT_TRUE(padsim);
+  const Csv& csv = padsim->csv;
   EXPECT_NEAR(csv.rows.back()[csv.column("v(out)")], v_out, 1e-3 * 50);
   // The common mode stays where 1 MOhm holds it, near ground: within 2e-4 of the 50 V.
   double largest_common_mode = 0;
@@ -608,11 +631,10 @@ TEST_F(Cli, FlybackAtLooseTolerancesRunsThroughItsTurnOnsAndMatchesNgspice) {
   for (const std::string method : {"gear", "trap"}) {
     for (const std::string rtol : {"5e-2", "2e-2", "1e-2", "5e-3"}) {
       const std::string csv_path = path("flyback" + method + rtol + ".csv");
-      const Result r = run(netlist + " --method " + method + " --rtol " + rtol + " --probe 'v(out),v(drain)' -q -o " + csv_path);
-      ASSERT_EQ(r.exit_code, 0) << method << " " << rtol << ": " << r.err;
-      const Csv csv = parse_csv(read(csv_path));
-      ASSERT_FALSE(csv.rows.empty());
-      EXPECT_NEAR(csv.rows.back()[0], 300e-6, 1e-15);
+      const auto padsim = run_to(300e-6, netlist + " --method " + method + " --rtol " + rtol + " --probe 'v(out),v(drain)' -q",
+                                 csv_path, method + " " + rtol);
+      if (!padsim) continue;
+      const Csv& csv = padsim->csv;
       // The global error of these tolerances: up to 1.0 % on v(out) after 30 periods.
       EXPECT_NEAR(csv.rows.back()[csv.column("v(out)")], v_out, 1.5e-2 * v_out) << method << " " << rtol;
       double peak = 0;
@@ -645,11 +667,9 @@ TEST_F(Cli, LlcConvertersIsolatedSecondaryRunsThroughHardSwitchingAndMatchesNgsp
   const std::string netlist = write("pd.cir", "* llc\n" + circuit + ".end\n");
   for (const char* rtol : {"1e-3", "1e-6", "1e-8"}) {
     const std::string csv_path = path(std::string("padsim") + rtol + ".csv");
-    const Result r = run(netlist + " --rtol " + rtol + " --probe 'v(out),i(lr),v(ct)' -q -o " + csv_path);
-    ASSERT_EQ(r.exit_code, 0) << rtol << ": " << r.err;
-    const Csv csv = parse_csv(read(csv_path));
-    ASSERT_FALSE(csv.rows.empty());
-    EXPECT_NEAR(csv.rows.back()[0], 12e-6, 1e-15);
+    const auto padsim = run_to(12e-6, netlist + " --rtol " + rtol + " --probe 'v(out),i(lr),v(ct)' -q", csv_path, rtol);
+    if (!padsim) continue;
+    const Csv& csv = padsim->csv;
     // ngspice's trapezoidal and gear runs differ by 1.1e-4 V and 2.4e-4 A here.
     EXPECT_NEAR(csv.rows.back()[csv.column("v(out)")], v_out, 2e-4 * 8.8) << rtol;
     EXPECT_NEAR(csv.rows.back()[csv.column("i(lr)")], i_lr, 1e-4 * 42) << rtol;
@@ -676,15 +696,13 @@ TEST_F(Cli, MosfetBoostAtTightTolerancesRarelyFailsTheErrorTest) {
                                     ".model schottky d(is=1e-6 n=1.05 rs=0.03 cjo=150p)\n.tran 50n 300u\n.end\n");
   for (const char* rtol : {"1e-8", "1e-9"}) {
     const std::string csv_path = path(std::string("mosfet_boost") + rtol + ".csv");
-    const Result r = run(netlist + " --rtol " + rtol + " --probe 'v(out)' --stats -q -o " + csv_path);
-    ASSERT_EQ(r.exit_code, 0) << rtol << ": " << r.err;
-    const Csv csv = parse_csv(read(csv_path));
-    ASSERT_FALSE(csv.rows.empty());
-    EXPECT_NEAR(csv.rows.back()[0], 300e-6, 1e-15);
-    EXPECT_NEAR(csv.rows.back()[csv.column("v(out)")], 16.348165, 1e-5) << rtol;
-    const long steps = statistic(r.err, "steps"), failed = statistic(r.err, "rejected_error_test");
-    ASSERT_GT(steps, 0) << r.err;
-    ASSERT_GE(failed, 0) << r.err;
+    const auto padsim = run_to(300e-6, netlist + " --rtol " + rtol + " --probe 'v(out)' --stats -q", csv_path, rtol);
+    if (!padsim) continue;
+    EXPECT_NEAR(padsim->csv.rows.back()[padsim->csv.column("v(out)")], 16.348165, 1e-5) << rtol;
+    const std::string& stats = padsim->result.err;
+    const long steps = statistic(stats, "steps"), failed = statistic(stats, "rejected_error_test");
+    ASSERT_GT(steps, 0) << stats;
+    ASSERT_GE(failed, 0) << stats;
     EXPECT_LT(failed, steps / 15) << rtol << ": " << failed << " error-test failures in " << steps << " steps";
   }
 }

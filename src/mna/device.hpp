@@ -259,8 +259,16 @@ class Device {
   virtual double stored_energy(const Vector& x) const { (void)x; return 0; }
   virtual double delivered_energy(double t, const Vector& impulse) const { (void)t, (void)impulse; return 0; }
 
-  // Initial condition (IC=) written into x0 for a uic start.
+  // Initial condition (IC=) of a current, written into x0 for a uic start.
   virtual void initial_condition(Vector& x0) const { (void)x0; }
+  // Initial condition (IC=) of a voltage: v(a) - v(b) = value at a uic start. The model solves
+  // these together with .ic (model.cpp): written one by one, a capacitor between two nodes
+  // would take whatever the other node held when its card came.
+  struct InitialVoltage {
+    int a, b;
+    double value;
+  };
+  virtual std::optional<InitialVoltage> initial_voltage() const { return std::nullopt; }
   // The IC= given and the same quantity at x (a capacitor's voltage, an inductor's current),
   // with the unknown whose tolerance measures it: tells a start that kept it from one the
   // circuit overrode (a capacitor across a source). None without IC=.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cctype>
+#include <numeric>
+#include <span>
 #include <unordered_set>
 
 namespace mna {
@@ -294,11 +296,67 @@ std::string Model::predicate_label(int predicate) const {
   return owner->predicate_label(predicate - first);
 }
 
+namespace {
+
+// Node voltages in x0 from conditions v(a) - v(b) = value, the earlier winning where they
+// conflict (a loop of them that does not add up): a weighted union-find, each node's voltage
+// an offset from its tree's root, ground (index `unknowns`) always a root. A tree without ground
+// has its root at 0 V. Nodes under no condition keep x0's value.
+void apply_initial_voltages(std::span<const Device::InitialVoltage> conditions, int unknowns, Vector& x0) {
+  const int ground_slot = unknowns;
+  std::vector<int> parent(static_cast<std::size_t>(unknowns) + 1);
+  std::iota(parent.begin(), parent.end(), 0);
+  std::vector<double> offset(parent.size(), 0.0);  // v(node) - v(parent)
+  std::vector<char> conditioned(parent.size(), 0);
+  const auto slot = [&](int node) { return node == ground ? ground_slot : node; };
+  // The root of node's tree, with offset[node] then relative to it.
+  const auto find = [&](int node) {
+    int root = node;
+    double sum = 0;
+    while (parent[root] != root) sum += offset[root], root = parent[root];
+    for (int k = node; parent[k] != root;) {  // path compression
+      const int next = parent[k];
+      const double rest = sum - offset[k];
+      offset[k] = sum;
+      parent[k] = root;
+      sum = rest;
+      k = next;
+    }
+    return root;
+  };
+  for (const auto& [a_node, b_node, value] : conditions) {
+    const int a = slot(a_node), b = slot(b_node);
+    conditioned[a] = conditioned[b] = 1;
+    const int root_a = find(a), root_b = find(b);
+    if (root_a == root_b) continue;  // fixed by earlier conditions
+    // v(a) = v(root_a) + offset[a] and v(b) = v(root_b) + offset[b], with v(a) - v(b) = value.
+    if (root_a == ground_slot) {
+      parent[root_b] = root_a;
+      offset[root_b] = offset[a] - value - offset[b];
+    } else {
+      parent[root_a] = root_b;
+      offset[root_a] = offset[b] + value - offset[a];
+    }
+  }
+  for (int node = 0; node < unknowns; ++node)
+    if (conditioned[node]) {
+      find(node);
+      x0[node] = node == parent[node] ? 0.0 : offset[node];
+    }
+}
+
+}  // namespace
+
 Vector Model::initial_conditions() const {
   Vector x0 = Vector::Zero(size());
   for (const auto& d : devices_) d->initial_auxiliaries(x0);
   for (const auto& d : devices_) d->initial_condition(x0);
-  for (const auto& [n, value] : held_nodes_) x0[n] = value;
+  // A device's IC= before .ic, which it overrides where they conflict (as in SPICE).
+  std::vector<Device::InitialVoltage> voltages;
+  for (const auto& d : devices_)
+    if (const auto voltage = d->initial_voltage()) voltages.push_back(*voltage);
+  for (const auto& [n, value] : held_nodes_) voltages.push_back({n, ground, value});
+  apply_initial_voltages(voltages, size(), x0);
   return x0;
 }
 

@@ -502,6 +502,51 @@ TEST(Start, IdealDiodeBridgeFromRestTurnsOnTheCurrentSourcesDiodes) {
   EXPECT_NEAR(run.events[0].x_after[unknown(m, "i(d3)")], 0, 1e-6);
 }
 
+// Two capacitors in series with their own IC= (C2 0.5 V from b to m, C3 1.5 V from m to ground)
+// are two states: v(b) = 2 V, v(m) = 1.5 V at the start, whatever the cards' order or whether m's
+// 1.5 V comes from C3's IC= or from .ic. Through R (1 kOhm from b to ground) both lose the same
+// charge: v(b) = 2 exp(-t / RC'), C' = C / 2, and v(m) = 1.5 - (2 - v(b)) / 2. (A capacitor's
+// voltage was written into its node from the other node's value when its card came: C2 before
+// C3 started at v(b) = 0.5 V.)
+TEST(Start, SeriesCapacitorsInitialVoltagesHoldInAnyCardOrder) {
+  for (const int variant : {0, 1, 2}) {
+    CircuitSpec c;
+    c.add("r1", {"b", "0"}, 1e3);
+    if (variant == 1) c.add("c3", {"m", "0"}, 1e-9).initial_condition = 1.5;
+    c.add("c2", {"b", "m"}, 1e-9).initial_condition = 0.5;
+    if (variant == 0) c.add("c3", {"m", "0"}, 1e-9).initial_condition = 1.5;
+    if (variant == 2) c.add("c3", {"m", "0"}, 1e-9), c.initial_voltages["m"] = 1.5;
+    Model m(c, {.tstep = 1e-8, .tstop = 3e-6});
+    const Simulation run = simulate(m, 3e-6, true);
+    ASSERT_TRUE(run.ok) << run.failure;
+    const int b = unknown(m, "v(b)"), mid = unknown(m, "v(m)");
+    EXPECT_DOUBLE_EQ(run.states.front()[b], 2.0) << variant;
+    EXPECT_DOUBLE_EQ(run.states.front()[mid], 1.5) << variant;
+    for (std::size_t k = 0; k < run.times.size(); ++k) {
+      const double v_b = 2 * std::exp(-run.times[k] / 0.5e-6);
+      EXPECT_NEAR(run.states[k][b], v_b, 2e-5) << variant << " at " << run.times[k];
+      EXPECT_NEAR(run.states[k][mid], 1.5 - (2 - v_b) / 2, 2e-5) << variant << " at " << run.times[k];
+    }
+  }
+}
+
+// A device's IC= overrides .ic on the same node (SPICE's precedence), and of two IC= that
+// cannot both hold the first card's is kept; a capacitor between two otherwise free nodes
+// keeps its voltage too.
+TEST(Start, DeviceInitialConditionsOverrideDotIcAndTheFirstOfAConflictIsKept) {
+  CircuitSpec c;
+  c.add("r1", {"a", "0"}, 1e3);
+  c.add("c1", {"a", "0"}, 1e-9).initial_condition = 1.0;
+  c.add("c2", {"a", "0"}, 1e-9).initial_condition = 3.0;
+  c.initial_voltages["a"] = 2.0;
+  c.add("r2", {"p", "q"}, 1e3);
+  c.add("c3", {"p", "q"}, 1e-9).initial_condition = 0.7;
+  Model m(c, {.tstep = 1e-8, .tstop = 1e-6});
+  const Vector x0 = m.initial_conditions();
+  EXPECT_DOUBLE_EQ(x0[unknown(m, "v(a)")], 1.0);
+  EXPECT_DOUBLE_EQ(x0[unknown(m, "v(p)")] - x0[unknown(m, "v(q)")], 0.7);
+}
+
 TEST(Start, HeldInitialVoltageThenRelaxes) {
   // .ic v(out)=2 without uic: the op holds it, then the capacitor relaxes toward 1 V with
   // tau = (R1 || R2) C.

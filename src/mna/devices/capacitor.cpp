@@ -31,11 +31,9 @@ class Capacitor final : public Device {
     if (!card().initial_condition) return std::nullopt;
     return InitialConditionAt{*card().initial_condition, value(x, a_) - value(x, b_), a_ != ground ? a_ : b_};
   }
-  void initial_condition(Vector& x0) const override {
-    const std::optional<double>& initial_voltage = card().initial_condition;
-    if (!initial_voltage) return;
-    if (a_ != ground) x0[a_] = value(x0, b_) + *initial_voltage;
-    else if (b_ != ground) x0[b_] = -*initial_voltage;
+  std::optional<InitialVoltage> initial_voltage() const override {
+    if (!card().initial_condition) return std::nullopt;
+    return InitialVoltage{a_, b_, *card().initial_condition};
   }
 
  private:

@@ -2,7 +2,7 @@
 // so the grammar is instantiated in that one translation unit.
 //
 // Precedence in expressions, loosest first (as ngspice's B sources and .param):
-//   c ? a : b,  ||,  &&,  == !=,  < <= > >=,  + -,  * /,  unary - + !,  ^ ** (right assoc.)
+//   c ? a : b,  ||,  &&,  == !=,  < <= > >=,  + -,  * /,  unary - + !,  ^ ** (left assoc.)
 // so -2^2 is -(2^2) = -4, as ngspice computes it.
 #pragma once
 
@@ -417,6 +417,7 @@ x3::rule<class additive_id, ExpressionPtr> const additive = "an expression";
 x3::rule<class multiplicative_id, ExpressionPtr> const multiplicative = "an expression";
 x3::rule<class unary_id, ExpressionPtr> const unary = "an expression";
 x3::rule<class power_id, ExpressionPtr> const power = "an expression";
+x3::rule<class exponent_id, ExpressionPtr> const exponent = "an expression";
 x3::rule<class primary_id, ExpressionPtr> const primary = "an expression";
 x3::rule<class node_voltage_id, ExpressionPtr> const node_voltage = "v(node)";
 x3::rule<class branch_current_id, ExpressionPtr> const branch_current = "i(vsource)";
@@ -457,8 +458,13 @@ auto const current_open_def = x3::raw[lexeme[no_case[lit('i')] >> '(']];
 auto const unary_def = nested[(minus_token > unary)[make_unary<UnaryOperator::negate>] |
                               (not_token > unary)[make_unary<UnaryOperator::logical_not>] |
                               (lit('+') > unary)[assign] | power[assign]];
+// Left-associative as in ngspice (2^3^2 is 64); a signed exponent takes a power chain of its own
+// (2^-3^2 is 2^-9).
 auto const power_def =
-    primary[assign] >> -(((lit("**") | lit('^')) > unary)[make_binary<BinaryOperator::power>]);
+    primary[assign] >> *(((lit("**") | lit('^')) > exponent)[make_binary<BinaryOperator::power>]);
+auto const exponent_def = nested[(minus_token > unary)[make_unary<UnaryOperator::negate>] |
+                                 (not_token > unary)[make_unary<UnaryOperator::logical_not>] |
+                                 (lit('+') > unary)[assign] | primary[assign]];
 auto const primary_def = unsigned_number[assign] | (lit('(') > expression > closing_paren)[assign] |
                          (lit('{') > expression > '}')[assign] |
                          (lit('\'') > expression > '\'')[assign] | node_voltage[assign] |
@@ -642,7 +648,7 @@ BOOST_SPIRIT_DEFINE(node, element_name, model_name, source_name, inductor_name, 
                     expression, logical_or, logical_and, equality, relational, additive,
                     multiplicative)
 BOOST_SPIRIT_DEFINE(minus_token, not_token, voltage_open, current_open)
-BOOST_SPIRIT_DEFINE(unary, power, primary, node_voltage, branch_current, call, arguments,
+BOOST_SPIRIT_DEFINE(unary, power, exponent, primary, node_voltage, branch_current, call, arguments,
                     closing_paren, assignment, parameter, params_keyword, two_terminal_card,
                     coupling_card, source_card, voltage_controlled_card, current_controlled_card,
                     behavioral_card, diode_card, mosfet_card, voltage_switch_card, current_switch_card,

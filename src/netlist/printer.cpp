@@ -234,13 +234,17 @@ struct ExpressionPrinter {
   std::string operator()(const Unary& u) const {
     return fmt::format("{}{}", u.op == UnaryOperator::negate ? "-" : "!", print_at(*u.operand, unary));
   }
-  // Left-associative levels take their own level on the left and the next on the right; power
-  // (right-associative) a primary on the left and a unary on the right, as the grammar does.
+  // Each level takes its own level on the left (left-associative) and the next on the right;
+  // power's right is an exponent, as the grammar has it: a primary or a signed operand.
   std::string operator()(const Binary& b) const {
     const Level level = level_of(b.op);
-    const Level left = level == power ? primary : level;
-    const Level right = level == power ? unary : static_cast<Level>(level + 1);
-    return fmt::format("{} {} {}", print_at(*b.left, left), symbol(b.op), print_at(*b.right, right));
+    if (level == power) {
+      const Level exponent = level_of(*b.right);
+      const std::string right = print(*b.right);
+      if (exponent != unary && exponent != primary) return fmt::format("{} {} ({})", print_at(*b.left, power), symbol(b.op), right);
+      return fmt::format("{} {} {}", print_at(*b.left, power), symbol(b.op), right);
+    }
+    return fmt::format("{} {} {}", print_at(*b.left, level), symbol(b.op), print_at(*b.right, static_cast<Level>(level + 1)));
   }
   std::string operator()(const Conditional& c) const {
     return fmt::format("{} ? {} : {}", print_at(*c.condition, logical_or), print(*c.if_true), print(*c.if_false));

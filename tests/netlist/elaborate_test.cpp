@@ -58,7 +58,10 @@ TEST(Elaborate, OperatorsAndPrecedence) {
   EXPECT_EQ(value_of("(1+2)*3"), 9.0);
   EXPECT_EQ(value_of("-2^2"), -4.0);  // as ngspice: unary minus binds looser than ^
   EXPECT_EQ(value_of("2**3"), 8.0);
-  EXPECT_EQ(value_of("2^3^2"), 512.0);  // right associative
+  EXPECT_EQ(value_of("2^3^2"), 64.0);  // left-associative, as ngspice 39 computes it
+  EXPECT_EQ(value_of("2**3**2"), 64.0);
+  EXPECT_EQ(value_of("2^-3^2"), 1.0 / 512);  // a signed exponent's chain is its own: 2^-(3^2)
+  EXPECT_EQ(value_of("-2^2^3"), -64.0);
   EXPECT_EQ(value_of("2^-1"), 0.5);
   EXPECT_EQ(value_of("8/2/2"), 2.0);  // left associative
   EXPECT_EQ(value_of("10-4-3"), 3.0);

@@ -46,8 +46,8 @@ TEST(RoundTrip, ALoneDollarIsNoName) {
 // Printed, an expression nests no deeper than its text did: a chain of 150 unary minus signs
 // (found by the fuzzer) printed as "(-(-(...)))" nested twice as deep and exceeded the parser's
 // limit; so did a sum of 300 terms as "((a + b) + c) ...". Operators keep their meaning where
-// precedence and associativity decide: (-x)^2, -(x^2), a - (b - c), 2^3^2, a ? b : c as an
-// operand.
+// precedence and associativity decide: (-x)^2, -(x^2), a - (b - c), 2^3^2 (left-associative),
+// 2^(3^2), 2^-3^2, a ? b : c as an operand.
 TEST(RoundTrip, ExpressionsPrintAsDeepAsTheyWereWritten) {
   std::string minus(150, '-');
   std::string sum = "1";
@@ -55,11 +55,11 @@ TEST(RoundTrip, ExpressionsPrintAsDeepAsTheyWereWritten) {
   expect_round_trip("t\n.param k=" + minus + "2\nB1 a 0 V={" + sum + "}\n", "deep.cir");
   netlist::Diagnostics diagnostics;
   const auto parsed = netlist::parse_text(
-      "t\nB1 a 0 V={(-v(a))^2 + -v(a)^2 + (v(a) - (1 - v(b))) * 2^3^2 + (v(a) > 0 ? 1 : 2) * (1 + 2) / (3 * 4)}\n",
+      "t\nB1 a 0 V={(-v(a))^2 + -v(a)^2 + (v(a) - (1 - v(b))) * 2^3^2 + 2^(3^2) + 2^-3^2 + (v(a) > 0 ? 1 : 2) * (1 + 2) / (3 * 4)}\n",
       "precedence.cir", diagnostics);
   ASSERT_FALSE(diagnostics.has_errors()) << diagnostics.to_string();
   EXPECT_EQ(netlist::print(parsed),
-            "t\nb1 a 0 v={(-v(a)) ^ 2 + -v(a) ^ 2 + (v(a) - (1 - v(b))) * 2 ^ 3 ^ 2 + (v(a) > 0 ? 1 : 2) * (1 + 2) / (3 * 4)}\n"
+            "t\nb1 a 0 v={(-v(a)) ^ 2 + -v(a) ^ 2 + (v(a) - (1 - v(b))) * 2 ^ 3 ^ 2 + 2 ^ (3 ^ 2) + 2 ^ -3 ^ 2 + (v(a) > 0 ? 1 : 2) * (1 + 2) / (3 * 4)}\n"
             ".end\n");
 }
 

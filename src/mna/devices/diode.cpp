@@ -42,7 +42,8 @@ class Diode final : public Device {
     critical_breakdown_voltage_ = junction::critical_voltage(breakdown_thermal_voltage_, saturation_current_);
     if (!(exponent_limit_ > 1)) throw ModelError("diode '" + spec.name + "': IS too large");
     if (auto bv = spec.model.find("bv"); bv != spec.model.end() && std::isfinite(bv->second))
-      breakdown_voltage_ = breakdown_knee(bv->second, parameter(spec, "ibv", 1e-3) * area, vt, run.reltol);
+      // IBV is not scaled by the area (ngspice's level 1, diotemp.c), though IS is.
+      breakdown_voltage_ = breakdown_knee(bv->second, parameter(spec, "ibv", 1e-3), vt, run.reltol);
   }
 
   void allocate(Unknowns& u) override {

@@ -50,12 +50,13 @@ bool apply_tolerances(const netlist::FlatCircuit& flat, const CommandOptions& op
   bool positive = true;
   auto option = [&](const char* name, double fallback) {
     const netlist::Option* o = flat.find_option(name);
-    if (!o || !o->number) return fallback;
-    if (!(*o->number > 0)) {
-      fmt::print(stderr, "{}", netlist::format(netlist::Diagnostic{
-                                   netlist::Severity::error, o->where,
-                                   fmt::format("{} must be a positive number, got {}", name, *o->number)}));
+    if (!o) return fallback;
+    if (!o->number || !(*o->number > 0)) {
+      const std::string given = o->number ? fmt::format("{}", *o->number) : o->word.empty() ? "no value" : "'" + o->word + "'";
+      fmt::print(stderr, "{}", netlist::format(netlist::Diagnostic{netlist::Severity::error, o->where,
+                                                                   fmt::format("{} must be a positive number, got {}", name, given)}));
       positive = false;
+      return fallback;
     }
     return *o->number;
   };
@@ -100,6 +101,52 @@ bool apply_method(const netlist::FlatCircuit& flat, const CommandOptions& option
                                netlist::Severity::error, o->where,
                                "unknown integration method '" + o->word + "' (expected gear or trap)"}));
   return false;
+}
+
+// The .options padsim reads are reltol, abstol, vntol, method (above) and temp, tnom (below).
+// SPICE's controls of its own Newton iteration, step and output have no meaning for padsim's
+// integrator and are passed over quietly, as ngspice passes over others' options; any other name
+// is warned of (a misspelt reltol would otherwise run at the default unseen).
+void warn_of_unknown_options(const netlist::FlatCircuit& flat) {
+  static const std::set<std::string, std::less<>> read = {"reltol", "abstol", "vntol", "method", "temp", "tnom"};
+  static const std::set<std::string, std::less<>> spice_own = {
+      "gmin",   "itl1",  "itl2",     "itl3",     "itl4",     "itl5",     "itl6",         "trtol",      "chgtol",
+      "maxord", "xmu",   "pivtol",   "pivrel",   "gminsteps", "srcsteps", "noopiter",    "ramptime",   "rshunt",
+      "cshunt", "klu",   "sparse",   "numdgt",   "acct",     "noacct",   "list",         "nomod",      "nopage",
+      "node",   "opts",  "interp",   "warn",     "maxwarns", "savecurrents", "keepopinfo", "norefvalue", "seed"};
+  for (const netlist::Option& option : flat.options)
+    if (!read.contains(option.name) && !spice_own.contains(option.name))
+      fmt::print(stderr, "{}", netlist::format(netlist::Diagnostic{netlist::Severity::warning, option.where,
+                                                                   "option '" + option.name + "' is unknown to padsim and ignored"}));
+}
+
+// padsim's junctions (Shockley diodes, MOSFETs) are modelled at 27 C, their nominal temperature
+// too. A netlist that asks for another (.temp, .options temp= or tnom=) while it has them is
+// refused: their currents would be another circuit's. Without them nothing depends on it.
+// Returns false, having printed the error.
+bool check_temperature(const netlist::FlatCircuit& flat) {
+  const auto junction = std::find_if(flat.elements.begin(), flat.elements.end(), [&](const netlist::FlatElement& e) {
+    if (e.kind == netlist::ElementKind::mosfet) return true;
+    if (e.kind != netlist::ElementKind::diode) return false;
+    const netlist::FlatModel* model = flat.find_model(e.model);
+    return !(model && model->get("ideal").value_or(0) != 0);
+  });
+  if (junction == flat.elements.end()) return true;
+  bool nominal = true;
+  auto refuse = [&](const std::string& asked, const netlist::SourceRange& where) {
+    fmt::print(stderr, "{}", netlist::format(netlist::Diagnostic{
+                                 netlist::Severity::error, where,
+                                 fmt::format("{}: padsim models its diodes and MOSFETs ({} among them) at 27 C only",
+                                             asked, junction->name)}));
+    nominal = false;
+  };
+  if (flat.temperature && *flat.temperature != 27) refuse(fmt::format(".temp {} C", *flat.temperature), flat.temperature_where);
+  for (const char* name : {"temp", "tnom"}) {
+    const netlist::Option* o = flat.find_option(name);
+    if (o && !(o->number && *o->number == 27))
+      refuse(o->number ? fmt::format("{}={} C", name, *o->number) : fmt::format("{}={}", name, o->word), o->where);
+  }
+  return nominal;
 }
 
 // One CSV column set, written to every requested waveform writer.
@@ -317,8 +364,6 @@ class Session {
     inputs_ = {options_.netlist};
     for (const netlist::FlatElement& element : flat->elements)
       if (element.where.begin.file) inputs_.insert(element.where.begin.file->path);
-    if (flat->temperature && *flat->temperature != 27 && !options_.quiet)
-      fmt::print(stderr, "padsim: warning: .temp {} ignored: devices are simulated at 27 C\n", *flat->temperature);
     settings_.tstop = options_.tstop.value_or(flat->tran ? flat->tran->stop : 0);
     settings_.tstep = flat->tran && flat->tran->step > 0 ? flat->tran->step : settings_.tstop / 50;
     tstart_ = flat->tran ? flat->tran->start : 0;
@@ -338,6 +383,8 @@ class Session {
     mna::Tolerances tolerances;
     if (!apply_tolerances(*flat, options_, integrator_options_, tolerances)) return bad_input;
     if (!apply_method(*flat, options_, integrator_options_)) return bad_input;
+    if (!check_temperature(*flat)) return bad_input;
+    if (!options_.quiet) warn_of_unknown_options(*flat);
     settings_.reltol = integrator_options_.rtol;
     integrator_options_.time_scale = settings_.tstop;
     // TMAX, or (TSTOP - TSTART) / 50 as ngspice's fallback, and within a twentieth of any sine

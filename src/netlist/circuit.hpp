@@ -147,6 +147,7 @@ struct FlatCircuit {
   std::vector<Option> options;                // in order; a later one overrides an earlier one
   std::vector<OutputRequest> saves;
   std::optional<double> temperature;          // .temp, degrees Celsius
+  SourceRange temperature_where;              // its value on the .temp card
   std::vector<Diagnostic> warnings;           // warnings and notes from parsing and elaboration
 
   const FlatModel* find_model(const std::string& name) const;

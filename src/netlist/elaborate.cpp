@@ -1050,6 +1050,7 @@ class Elaborator {
   void elaborate_card(const ast::TempCard& card, const ast::Card& whole, const Instance& instance) {
     if (!at_top_level(whole, instance, ".temp")) return;
     circuit_.temperature = value(card.value, *instance.scope);
+    circuit_.temperature_where = card.value->where;
   }
 
   void elaborate_card(const ast::TitleCard& card, const ast::Card&, const Instance&) {

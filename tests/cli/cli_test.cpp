@@ -329,6 +329,29 @@ TEST_F(Cli, BadInputExitsWithTwo) {
   EXPECT_NE(r.err.find("loop of voltage sources"), std::string::npos) << r.err;
 }
 
+// A temperature other than 27 C changes a junction's currents, which padsim models at 27 C only:
+// refused (at the card) where the circuit has junctions, and of no account where it has none.
+// Tolerances must be numbers; an option padsim does not know is warned of.
+TEST_F(Cli, OptionsPadsimCannotHonourAreRefusedAndUnknownOnesWarnedOf) {
+  const std::string diode = "* diode\nV1 a 0 1\nR1 a k 1k\nD1 k 0 dm\n.model dm D(is=1e-14)\n.tran 1u 10u\n";
+  for (const std::string card : {".temp 100", ".options temp=100", ".options tnom=50"}) {
+    const Result r = run(write("hot.cir", diode + card + "\n.end\n") + " -o " + path("o.csv"));
+    EXPECT_EQ(r.exit_code, 2) << card;
+    EXPECT_NE(r.err.find("hot.cir:7:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("27 C only"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(run(write("nominal.cir", diode + ".temp 27\n.options tnom=27\n.end\n") + " -o " + path("o.csv")).exit_code, 0);
+  const std::string linear = "* linear\nV1 a 0 1\nR1 a 0 1k\n.tran 1u 10u\n";
+  EXPECT_EQ(run(write("linear.cir", linear + ".temp 100\n.end\n") + " -o " + path("o.csv")).exit_code, 0);
+  Result r = run(write("word.cir", linear + ".options reltol=abc\n.end\n") + " -o " + path("o.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("word.cir:5:10: error: reltol must be a positive number, got 'abc'"), std::string::npos) << r.err;
+  r = run(write("unknown.cir", linear + ".options gmin=1e-9 reltl=1e-6\n.end\n") + " -o " + path("o.csv"));
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.err.find("unknown.cir:5:20: warning: option 'reltl' is unknown to padsim and ignored"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("option 'gmin'"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, GridAddsInterpolatedRowsOnTheTstepGrid) {
   const Result plain = run(write("rc.cir", rc_netlist) + " --rtol 1e-6");
   const Result r = run(write("rc.cir", rc_netlist) + " --rtol 1e-6 --grid");

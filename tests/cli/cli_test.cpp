@@ -888,4 +888,23 @@ TEST_F(Cli, PlotWritesPng) {
   EXPECT_EQ(read(png).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
 }
 
+// The plot's path is written through, as -o's is: a symlink stays a symlink (the PNG lands in
+// its target), and a device that cannot take it is an error. The path used to be removed before
+// gnuplot wrote, which, run as root, replaced /dev/full by a regular file.
+TEST_F(Cli, PlotWritesThroughTheGivenPathAndNeverRemovesIt) {
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "gnuplot not installed";
+  const std::string target = write("target.png", "old"), link = path("link.png");
+  fs::create_symlink(target, link);
+  const Result r = run(write("rc.cir", rc_netlist) + " -o " + path("rc.csv") + " --plot " + link);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_EQ(read(target).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  if (fs::exists("/dev/full")) {
+    const Result full = run(path("rc.cir") + " -o " + path("rc.csv") + " --plot /dev/full");
+    EXPECT_EQ(full.exit_code, 1);
+    EXPECT_NE(full.err.find("cannot write '/dev/full'"), std::string::npos) << full.err;
+    EXPECT_TRUE(fs::is_character_file("/dev/full"));
+  }
+}
+
 }  // namespace

@@ -1,8 +1,10 @@
 // PNG plot of a padsim CSV through gnuplot (pngcairo when present, else png).
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -83,6 +85,27 @@ struct Panel {
   std::vector<std::size_t> columns;  // 1-based CSV column numbers (time is 1)
 };
 
+// A file of our own in /tmp, removed when this goes out of scope.
+class TemporaryFile {
+ public:
+  // `suffix` after the unique part (gnuplot takes the format from the terminal, not the name).
+  explicit TemporaryFile(const std::string& suffix) : path_("/tmp/padsim-plot-XXXXXX" + suffix) {
+    const int fd = ::mkstemps(path_.data(), static_cast<int>(suffix.size()));
+    if (fd < 0) path_.clear();
+    else ::close(fd);
+  }
+  ~TemporaryFile() {
+    if (!path_.empty()) ::unlink(path_.c_str());
+  }
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+  bool created() const { return !path_.empty(); }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
 }  // namespace
 
 bool plot_png(const std::string& csv_path, const std::string& png_path, const std::string& note, std::string& error) {
@@ -140,7 +163,14 @@ bool plot_png(const std::string& csv_path, const std::string& png_path, const st
       "}} else {{\n"
       "  set terminal png size {0},{1} noenhanced\n"
       "}}\n", width, height);
-  put(script, "set output {}\n", quote(png_path));
+  // gnuplot writes a file of our own, copied to png_path once it is a PNG: the user's path is
+  // opened for writing as -o opens it (through a symlink, onto a device), never removed first.
+  const TemporaryFile png_written(".png");
+  if (!png_written.created()) {
+    error = "cannot create a temporary file for gnuplot's PNG";
+    return false;
+  }
+  put(script, "set output {}\n", quote(png_written.path()));
   put(script, "set datafile separator ','\n");
   put(script, "set grid\nset key top right noenhanced\nset lmargin 12\nset rmargin 4\n");
   const std::string title = std::filesystem::path(csv_path).filename().string();
@@ -160,24 +190,14 @@ bool plot_png(const std::string& csv_path, const std::string& png_path, const st
   }
   put(script, "unset multiplot\nset output\n");
 
-  char script_path[] = "/tmp/padsim-plot-XXXXXX";
-  int fd = ::mkstemp(script_path);
-  if (fd < 0) {
-    error = "cannot create a temporary gnuplot script";
-    return false;
-  }
-  bool wrote = ::write(fd, script.data(), script.size()) == static_cast<ssize_t>(script.size());
-  ::close(fd);
-  if (!wrote) {
-    ::unlink(script_path);
+  const TemporaryFile script_file("");
+  if (!script_file.created() || !(std::ofstream(script_file.path(), std::ios::binary) << script)) {
     error = "cannot write the temporary gnuplot script";
     return false;
   }
-  std::remove(png_path.c_str());
-  std::string command = fmt::format("gnuplot {} 2>&1", script_path);  // mkstemp path: no quoting needed
+  std::string command = fmt::format("gnuplot {} 2>&1", script_file.path());  // mkstemps path: no quoting needed
   FILE* pipe = ::popen(command.c_str(), "r");
   if (!pipe) {
-    ::unlink(script_path);
     error = "cannot start gnuplot";
     return false;
   }
@@ -185,7 +205,6 @@ bool plot_png(const std::string& csv_path, const std::string& png_path, const st
   std::array<char, 512> chunk;
   while (std::size_t n = std::fread(chunk.data(), 1, chunk.size(), pipe)) messages.append(chunk.data(), n);
   int status = ::pclose(pipe);
-  ::unlink(script_path);
   if (status == -1 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
     if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
       error = "gnuplot not found (install gnuplot-nox)";
@@ -194,11 +213,17 @@ bool plot_png(const std::string& csv_path, const std::string& png_path, const st
     return false;
   }
   // gnuplot reports some errors (missing columns, unreadable file) without a failing exit code.
-  std::ifstream png(png_path, std::ios::binary);
+  std::ifstream png(png_written.path(), std::ios::binary);
   char magic[8] = {};
   if (!png.read(magic, 8) || std::string_view(magic, 8) != std::string_view("\x89PNG\r\n\x1a\n", 8)) {
-    error = fmt::format("gnuplot did not write a PNG to '{}'{}{}", png_path,
+    error = fmt::format("gnuplot did not write a PNG for '{}'{}{}", png_path,
                         messages.empty() ? "" : ": ", messages);
+    return false;
+  }
+  png.seekg(0);
+  std::ofstream out(png_path, std::ios::binary | std::ios::trunc);
+  if (!out || !(out << png.rdbuf()) || !out.flush()) {
+    error = fmt::format("cannot write '{}': {}", png_path, std::strerror(errno));
     return false;
   }
   return true;

@@ -418,6 +418,7 @@ x3::rule<class multiplicative_id, ExpressionPtr> const multiplicative = "an expr
 x3::rule<class unary_id, ExpressionPtr> const unary = "an expression";
 x3::rule<class power_id, ExpressionPtr> const power = "an expression";
 x3::rule<class exponent_id, ExpressionPtr> const exponent = "an expression";
+x3::rule<class signed_operand_id, ExpressionPtr> const signed_operand = "an expression";
 x3::rule<class primary_id, ExpressionPtr> const primary = "an expression";
 x3::rule<class node_voltage_id, ExpressionPtr> const node_voltage = "v(node)";
 x3::rule<class branch_current_id, ExpressionPtr> const branch_current = "i(vsource)";
@@ -455,16 +456,15 @@ auto const minus_token_def = x3::raw[lit('-')];
 auto const not_token_def = x3::raw[lit('!')];
 auto const voltage_open_def = x3::raw[lexeme[no_case[lit('v')] >> '(']];
 auto const current_open_def = x3::raw[lexeme[no_case[lit('i')] >> '(']];
-auto const unary_def = nested[(minus_token > unary)[make_unary<UnaryOperator::negate>] |
-                              (not_token > unary)[make_unary<UnaryOperator::logical_not>] |
-                              (lit('+') > unary)[assign] | power[assign]];
+auto const signed_operand_def = (minus_token > unary)[make_unary<UnaryOperator::negate>] |
+                                (not_token > unary)[make_unary<UnaryOperator::logical_not>] |
+                                (lit('+') > unary)[assign];
+auto const unary_def = nested[signed_operand[assign] | power[assign]];
 // Left-associative as in ngspice (2^3^2 is 64); a signed exponent takes a power chain of its own
 // (2^-3^2 is 2^-9).
 auto const power_def =
     primary[assign] >> *(((lit("**") | lit('^')) > exponent)[make_binary<BinaryOperator::power>]);
-auto const exponent_def = nested[(minus_token > unary)[make_unary<UnaryOperator::negate>] |
-                                 (not_token > unary)[make_unary<UnaryOperator::logical_not>] |
-                                 (lit('+') > unary)[assign] | primary[assign]];
+auto const exponent_def = nested[signed_operand[assign] | primary[assign]];
 auto const primary_def = unsigned_number[assign] | (lit('(') > expression > closing_paren)[assign] |
                          (lit('{') > expression > '}')[assign] |
                          (lit('\'') > expression > '\'')[assign] | node_voltage[assign] |
@@ -648,7 +648,7 @@ BOOST_SPIRIT_DEFINE(node, element_name, model_name, source_name, inductor_name, 
                     expression, logical_or, logical_and, equality, relational, additive,
                     multiplicative)
 BOOST_SPIRIT_DEFINE(minus_token, not_token, voltage_open, current_open)
-BOOST_SPIRIT_DEFINE(unary, power, exponent, primary, node_voltage, branch_current, call, arguments,
+BOOST_SPIRIT_DEFINE(unary, signed_operand, power, exponent, primary, node_voltage, branch_current, call, arguments,
                     closing_paren, assignment, parameter, params_keyword, two_terminal_card,
                     coupling_card, source_card, voltage_controlled_card, current_controlled_card,
                     behavioral_card, diode_card, mosfet_card, voltage_switch_card, current_switch_card,

@@ -191,10 +191,13 @@ bool plot_png(const std::string& csv_path, const std::string& png_path, const st
   put(script, "unset multiplot\nset output\n");
 
   const TemporaryFile script_file("");
-  if (!script_file.created() || !(std::ofstream(script_file.path(), std::ios::binary) << script)) {
+  std::ofstream script_out;
+  if (script_file.created()) script_out.open(script_file.path(), std::ios::binary);
+  if (!script_out || !(script_out << script) || !script_out.flush()) {
     error = "cannot write the temporary gnuplot script";
     return false;
   }
+  script_out.close();
   std::string command = fmt::format("gnuplot {} 2>&1", script_file.path());  // mkstemps path: no quoting needed
   FILE* pipe = ::popen(command.c_str(), "r");
   if (!pipe) {

@@ -325,11 +325,12 @@ void print_statistics(const padae::Statistics& s, const padae::Statistics& outpu
              "\"rejected_domain\": {}, \"retaken_at_kinks\": {}, \"newton_iterations\": {}, \"jacobians\": {}, "
              "\"lu_factorizations\": {}, \"events\": {}, \"time_events\": {}, \"jumps\": {}, "
              "\"output_newton_iterations\": {}, \"output_lu_factorizations\": {}, \"unsolved_points\": {}, "
-             "\"output_unsolved_points\": {}, \"unknowns\": {}, \"t_end\": {}, \"wall_s\": {:.6f}}}\n",
+             "\"output_unsolved_points\": {}, \"unresolved_steps\": {}, \"unknowns\": {}, \"t_end\": {}, \"wall_s\": {:.6f}}}\n",
              s.steps, s.rejected_error_test + s.rejected_newton + s.rejected_domain + s.retaken_at_kinks,
              s.rejected_error_test, s.rejected_newton, s.rejected_domain, s.retaken_at_kinks, s.newton_iterations,
              s.jacobians, s.lu_factorizations, s.events, s.time_events, s.jumps, output.newton_iterations,
-             output.lu_factorizations, s.unsolved_points, output.unsolved_points, unknowns, t_end, wall);
+             output.lu_factorizations, s.unsolved_points, output.unsolved_points, s.unresolved_steps, unknowns, t_end,
+             wall);
 }
 
 // Points inside steps written or used from the polynomial (Statistics::unsolved_points): the
@@ -343,6 +344,17 @@ void warn_unsolved_points(const padae::Statistics& s, const padae::Statistics& o
              output.unsolved_points, s.unsolved_points);
 }
 
+// Steps accepted at the time resolution over a faster transient (Statistics::unresolved_steps):
+// the state after it is right, its shape between the rows is not resolved.
+void warn_unresolved_transients(const mna::Model& model, const padae::Statistics& s,
+                                const std::optional<padae::UnresolvedTransient>& first) {
+  if (s.unresolved_steps == 0 || !first) return;
+  fmt::print(stderr,
+             "padsim: warning: from t = {:.9g} s a transient faster than the time resolution ({:.3g} s there){} "
+             "was passed over in {} step(s) at the minimum step, which backward Euler damps as it decays; "
+             "its shape there is not resolved\n",
+             first->t, first->resolution, blame(model, first->unknown), s.unresolved_steps);
+}
 
 // One run of the command, phase by phase; each phase returns an exit code (success: go on).
 class Session {
@@ -572,7 +584,10 @@ class Session {
       }
     }
     if (!temporary_csv_.empty()) std::filesystem::remove(temporary_csv_);
-    if (!options_.quiet && integrator_) warn_unsolved_points(integrator_->statistics(), integrator_->output_statistics());
+    if (!options_.quiet && integrator_) {
+      warn_unsolved_points(integrator_->statistics(), integrator_->output_statistics());
+      warn_unresolved_transients(*model_, integrator_->statistics(), integrator_->unresolved_transient());
+    }
     if (options_.stats && integrator_)
       print_statistics(integrator_->statistics(), integrator_->output_statistics(), model_->size(),
                        integrator_->time(), wall_seconds());

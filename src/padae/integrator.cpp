@@ -54,6 +54,8 @@ constexpr double kNewtonTolerance = 0.33;   // of the error-test tolerance (IDA'
 constexpr double kMaxConvergenceRate = 0.9;
 constexpr int kMaxErrorTestFailures = 10;
 constexpr int kMaxNewtonFailures = 10;
+// Consecutive steps accepted at the time resolution with their error test failed (see step()).
+constexpr int kMaxUnresolvedSteps = 10000;
 // A first attempt whose modified Newton diverges on a fresh matrix while its iterates move the
 // charges ever further from the predictor, already this many times as far as the error test
 // allows, fails the test from its last iterate, without damped Newton (Integrator::Impl::step).
@@ -171,6 +173,7 @@ struct Integrator::Impl {
   void rescale_first_step();
   void update_weights();
   double minimum_step() const;
+  bool continues_last_change() const;
 
   // The last step's interpolating polynomial of x or of q at t_at, or its derivative there.
   enum class Interpolated { value, derivative };
@@ -363,6 +366,8 @@ struct Integrator::Impl {
   // integration: the trapezoidal rule would flip its sign step by step (a 1e-17 s RL, an ideal
   // diode's ROFF against its inductor, swung v(sw) from -18 V to +18 V), backward Euler damps it.
   bool fast_mode_left = false;
+  std::optional<UnresolvedTransient> unresolved;
+  int unresolved_in_a_row = 0;
   double h = 0, h_used = 0, cj = 0, error_coefficient = 0;
   // The step the error control chose for the last step, before it was shortened to end on a
   // source corner or a stop: a restart there starts from it (the shortened step says nothing
@@ -539,6 +544,12 @@ void Integrator::Impl::restore() {
     phi_x[j] /= beta[j];
     phi_q[j] /= beta[j];
   }
+}
+
+// Whether the attempt's change of the charges goes the way the last step's went (at a restart:
+// the way the initial derivative points), in the error test's weights.
+bool Integrator::Impl::continues_last_change() const {
+  return ((q_new - phi_q[0]).cwiseProduct(inverse_weight_q).dot(phi_q[1].cwiseProduct(inverse_weight_q))) > 0;
 }
 
 // In the first step after a (re)start there is no previous step: the history is the initial
@@ -922,7 +933,13 @@ StepOutcome Integrator::Impl::step(double t_stop) {
     if (h < minimum_step() && !ends_at_target) {
       // As SPICE does, the minimum step itself is tried once before giving up: a reduction by 4
       // can pass over the step the error test would accept.
-      if (!tried_minimum_step) {
+      // A failure there at a higher order or at the trapezoidal start is retried by backward
+      // Euler, whose step at the minimum is accepted whatever its error (unresolvable below).
+      if (!tried_minimum_step || order > 1 || trapezoidal_start()) {
+        if (tried_minimum_step) {
+          order = 1;
+          fast_mode_left = true;  // which is what the failure says: no trapezoidal start
+        }
         tried_minimum_step = true;
         h = minimum_step();
         continue;
@@ -931,7 +948,10 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       if (blamed < 0) weighted_max_norm(correction_q, inverse_weight_q, &blamed);
       return fail(t, "step size " + format_number(h, 17) + " s fell below the minimum step (" + format_number(minimum_step(), 3) +
                          " s) at t = " + format_number(t, 17) +
-                         (left_domain ? ": the model cannot be evaluated (outside its domain) at the steps tried" : ""),
+                         (left_domain ? ": the model cannot be evaluated (outside its domain) at the steps tried"
+                          : unresolved_in_a_row >= kMaxUnresolvedSteps
+                              ? ": a transient faster than that did not die out in " + std::to_string(kMaxUnresolvedSteps) + " such steps"
+                              : ""),
                   blamed);
     }
     rescale_first_step();
@@ -998,7 +1018,28 @@ StepOutcome Integrator::Impl::step(double t_stop) {
       continue;
     }
 
-    if (!error_test(error, error_k, error_k_minus_1, order_new)) {
+    // A transient faster than the time resolution (an inductor opened into 1e12 ohm at t = 0.1 s:
+    // L / R = 1e-15 s, the minimum step 3.6e-16 s there) fails the error test at every step t can
+    // represent. Backward Euler at the minimum step damps it as fast as its decay would be (it is
+    // L-stable): that step is accepted, counted and reported; the transient's shape is lost, not
+    // the state after it. One that has not died out in kMaxUnresolvedSteps steps is none, and
+    // a growing mode (a regenerative latch), which backward Euler that far past its stability
+    // boundary damps too, shows as a change against the last step's direction.
+    const bool passed = error_test(error, error_k, error_k_minus_1, order_new);
+    const bool unresolvable = !passed && order == 1 && !trapezoidal_step() && h <= minimum_step() &&
+                              unresolved_in_a_row < kMaxUnresolvedSteps && continues_last_change();
+    if (passed) {
+      unresolved_in_a_row = 0;
+    } else if (unresolvable) {
+      ++unresolved_in_a_row;
+      ++statistics.unresolved_steps;
+      if (!unresolved) {
+        int worst = -1;
+        weighted_max_norm(correction_q, inverse_weight_q, &worst);
+        unresolved = UnresolvedTransient{t, minimum_step(), worst};
+      }
+    }
+    if (!passed && !unresolvable) {
       restore();
       ++statistics.rejected_error_test;
       rejected[error_test_failures++] = {order, h, error};
@@ -1705,6 +1746,7 @@ const EventRecord& Integrator::last_event() const { return impl_->last_event; }
 const Failure& Integrator::failure() const { return impl_->failure; }
 const Statistics& Integrator::statistics() const { return impl_->statistics; }
 const Statistics& Integrator::output_statistics() const { return impl_->output_statistics; }
+const std::optional<UnresolvedTransient>& Integrator::unresolved_transient() const { return impl_->unresolved; }
 
 Vector Integrator::interpolate(double t_at) const { return impl_->interpolate(t_at); }
 Vector Integrator::dense_output(double t_at) { return dense_output(t_at, impl_->every_unknown); }

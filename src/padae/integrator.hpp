@@ -93,6 +93,16 @@ struct Statistics {
   // interpolating polynomial's x stands in, its algebraic unknowns possibly off by more than
   // the tolerance.
   long unsolved_points = 0;
+  // Steps accepted at the time resolution although their error test failed: a transient faster
+  // than any step t can represent (see Integrator::unresolved_transient).
+  long unresolved_steps = 0;
+};
+
+// Where steps first had to pass over a transient faster than the time resolution.
+struct UnresolvedTransient {
+  double t;                          // the first such step's start
+  double resolution;                 // the minimum step there
+  int unknown;                       // the unknown whose error was worst
 };
 
 // A predicate change at an event.
@@ -177,6 +187,8 @@ class Integrator {
   const EventRecord& last_event() const;
   const Failure& failure() const;
   const Statistics& statistics() const;
+  // The first transient the steps passed over unresolved (Statistics::unresolved_steps), if any.
+  const std::optional<UnresolvedTransient>& unresolved_transient() const;
   // The Newton work of dense_output(), counted apart: writing never changes the integration.
   const Statistics& output_statistics() const;
 

@@ -275,6 +275,34 @@ TEST_F(Cli, OpeningIdealSwitchHandsTheInductorCurrentToTheFreewheelingDiode) {
   }
 }
 
+TEST_F(Cli, InductorOpenedIntoSpicesRoffLateInTheRunDecaysPastTheTimeResolution) {
+  // 10 V, 10 ohm, 1 mH and a switch of ngspice's default ROFF, 1e12 ohm, opening at 100 ms: the
+  // current decays with L / ROFF = 1e-15 s, where no step below 3.6e-16 s advances t. The
+  // state after the decay is the closed form's; the run says it passed over the transient.
+  const Result r = run(write("interrupt.cir",
+                             "* interrupted inductor\nVs a 0 10\nR1 a b 10\nL1 b sw 1m\nS1 sw 0 ctl 0 swm\n"
+                             "Vctl ctl 0 PWL(0 5 0.1 5 0.100001 0)\n.model swm SW(vt=2.5 vh=0 ron=10m roff=1e12)\n"
+                             ".tran 1u 0.2 uic\n.end\n") +
+                       " --probe 'i(l1),v(sw)'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("faster than the time resolution"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("element l1"), std::string::npos) << r.err;
+  const double t_open = 0.1 + 1e-6 / 2, i_closed = 10 / 10.01, i_open = 10 / (10 + 1e12);
+  const Csv csv = parse_csv(r.out);
+  ASSERT_EQ(csv.rows.back()[0], 0.2);
+  for (const auto& row : csv.rows) {
+    const double t = row[0];
+    if (t < t_open - 1e-12) {
+      EXPECT_NEAR(row[1], i_closed * (1 - std::exp(-t * 10.01 / 1e-3)), 1e-6) << "t = " << t;
+    } else if (t > t_open + 1e-12) {
+      EXPECT_NEAR(row[1], i_open, 1e-6 * i_open) << "t = " << t;
+      EXPECT_NEAR(row[2], 10 - 10 * i_open, 1e-6) << "t = " << t;
+    } else {
+      EXPECT_LE(row[2], i_closed * 1e12 * (1 + 1e-9)) << "t = " << t;  // the peak: at most I0 * ROFF
+    }
+  }
+}
+
 TEST_F(Cli, GateDriveCornersAreRowsButEndNoStep) {
   // The pulse only drives the switch's guard: its corners (1, 1.01, 1.5 and 1.51 ms) cannot bend
   // the solution, so no step ends there, but the waveform keeps them as rows. The switch closes

@@ -70,6 +70,35 @@ TEST(Integrator, StopWithinTheTimeResolutionIsReachedWithoutAStep) {
   EXPECT_EQ(integrator.statistics().steps, steps);
 }
 
+TEST(Integrator, TransientFasterThanTheTimeResolutionIsPassedOverAndReported) {
+  // At t = 0.1 s no step below 16 ulp of t (3.6e-16 s) advances t; a decay of 1e-16 s fails
+  // the error test at every step that does. Its end state (x = 0) is reached all the same.
+  Decay decay(1e16);
+  Integrator integrator(decay, Options{});
+  ASSERT_TRUE(integrator.initialize(0.1, Vector::Constant(1, 1.0))) << integrator.failure().reason;
+  ASSERT_TRUE(run_until(integrator, 0.2)) << integrator.failure().reason;
+  EXPECT_LT(std::abs(integrator.state()[0]), 1e-12);
+  EXPECT_GT(integrator.statistics().unresolved_steps, 0);
+  ASSERT_TRUE(integrator.unresolved_transient().has_value());
+  EXPECT_EQ(integrator.unresolved_transient()->t, 0.1);
+  EXPECT_EQ(integrator.unresolved_transient()->unknown, 0);
+  EXPECT_NEAR(integrator.unresolved_transient()->resolution, 16 * std::numeric_limits<double>::epsilon() * 0.1, 1e-30);
+
+  // A growth as fast, which backward Euler at that step would damp as well, stops the run.
+  Decay growth(-1e16);
+  Integrator growing(growth, Options{});
+  ASSERT_TRUE(growing.initialize(0.1, Vector::Constant(1, 1.0))) << growing.failure().reason;
+  EXPECT_FALSE(run_until(growing, 0.2));
+  EXPECT_EQ(growing.statistics().unresolved_steps, 0);
+
+  // Where the step resolves the decay nothing is passed over.
+  Decay resolvable(1e16);
+  Integrator early(resolvable, Options{});
+  ASSERT_TRUE(early.initialize(1e-6, Vector::Constant(1, 1.0))) << early.failure().reason;
+  ASSERT_TRUE(run_until(early, 2e-6)) << early.failure().reason;
+  EXPECT_EQ(early.statistics().unresolved_steps, 0);
+}
+
 // x'' = -x as a first-order system: the step-size and order controller must reach high order.
 class Oscillator : public SemiExplicitSystem {
  public:

@@ -271,6 +271,28 @@ TEST(DeviceLoad, IdealDiodeModeGuard) {
   EXPECT_DOUBLE_EQ(evaluate(m, 0, x, {0}).f[i], 0.5);  // open: -i
 }
 
+TEST(DeviceLoad, IdealDiodeCharacteristicIsContinuousAtTheKnee) {
+  // RON 0.1, ROFF 1e3, VFWD 0.7: off i = v / 1e3 up to the knee (0.7 V, 0.7 mA); on, the line
+  // of slope 10 through the knee. The on -> off guard is the current's distance to the knee's.
+  CircuitSpec c;
+  c.add("d1", {"a", "0"}).model = {{"ideal", 1}, {"vfwd", 0.7}, {"ron", 0.1}, {"roff", 1e3}};
+  c.add("r1", {"a", "0"}, 1.0);
+  Model m(c, {});
+  const int a = unknown(m, "v(a)"), i = unknown(m, "i(d1)"), mode = unknown(m, "mode(d1)");
+  const double knee_current = 0.7 / 1e3;
+  Vector x = Vector::Zero(m.size());
+  x[a] = 0.7, x[i] = knee_current;  // the knee: both modes' rows vanish
+  EXPECT_NEAR(evaluate(m, 0, x, {1}).f[i], 0.0, 1e-15);
+  EXPECT_NEAR(evaluate(m, 0, x, {0}).f[i], 0.0, 1e-15);
+  x[a] = 1.2, x[i] = 2.0;
+  EXPECT_NEAR(evaluate(m, 0, x, {1}).f[i], (1.2 - 0.7) / 0.1 - (2.0 - knee_current), 1e-12);
+  EXPECT_NEAR(evaluate(m, 0, x, {0}).f[i], 1.2 / 1e3 - 2.0, 1e-12);
+  x[mode] = 1, x[i] = 1e-4;
+  Vector guard(1);
+  m.guards(0, x, guard);
+  EXPECT_NEAR(guard[0], 1e-4 - knee_current, 1e-18);  // below the knee's current: turns off
+}
+
 TEST(DeviceLoad, ShockleyDiodeMatchesNgspiceEquations) {
   CircuitSpec c;
   auto& d = c.add("d1", {"a", "0"});

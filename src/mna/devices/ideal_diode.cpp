@@ -1,9 +1,14 @@
 // Ideal diode (.model D with IDEAL=1): a predicate with its on/off mode held in an auxiliary
-// unknown. Off -> on when the voltage exceeds VFWD, on -> off when the current falls below 0:
-//     guard = mode ? i : (va - vk - VFWD)
-// Branch current i from anode to cathode; row: on: (va - vk - VFWD) / RON - i = 0, or
+// unknown. Its characteristic is two lines meeting at the knee (VFWD, I_knee = VFWD / ROFF):
+// off, i = v / ROFF up to the knee; on, the line of slope 1 / RON through the knee. Off -> on
+// when the voltage exceeds VFWD, on -> off when the current falls below I_knee:
+//     guard = mode ? i - I_knee : (va - vk - VFWD)
+// Branch current i from anode to cathode; row: on: (va - vk - VFWD) / RON - (i - I_knee) = 0, or
 // va - vk - VFWD = 0 for RON = 0 (the default); off: i = 0 for ROFF infinite (the default), or
 // (va - vk) / ROFF - i = 0.
+// Continuous, because a gap between the lines (the on line through (VFWD, 0)) has no mode
+// consistent where the circuit drives a current inside it: a bridge's diode whose line
+// inductor carried the other diodes' leakage there toggled every 0.6 ns for a microsecond.
 #include <cmath>
 
 #include "mna/device.hpp"
@@ -37,7 +42,7 @@ class IdealDiode final : public PredicateDevice {
     e.f(a_, i), e.f(k_, -i);
     const double r = on ? on_resistance_ : off_resistance_, offset = on ? forward_voltage_ : 0;
     const double alpha = r == 0 ? 1 : 1 / r, beta = r == 0 ? 0 : 1;
-    e.f(branch_, alpha * (v - offset) - beta * i);
+    e.f(branch_, alpha * (v - offset) - beta * (i - (on ? knee_current() : 0)));
     if (!e.jacobian()) return;
     e.df(slot_a_branch_, 1), e.df(slot_k_branch_, -1);
     e.df(slot_branch_a_, alpha), e.df(slot_branch_k_, -alpha), e.df(slot_branch_branch_, -beta);
@@ -53,13 +58,14 @@ class IdealDiode final : public PredicateDevice {
   std::string predicate_label(int) const override { return "conducting"; }
   void guards(double, const Vector& x, double* out) const override {
     const bool mode = x[mode_] > 0.5;
-    out[0] = mode ? x[branch_] : value(x, a_) - value(x, k_) - forward_voltage_;
+    out[0] = mode ? x[branch_] - knee_current() : value(x, a_) - value(x, k_) - forward_voltage_;
   }
   void jump_entries(std::vector<padae::JumpEntry>& out) const override {
     out.push_back({mode_, first_predicate(), 1.0});
   }
 
  private:
+  double knee_current() const { return forward_voltage_ / off_resistance_; }
   double on_resistance_, off_resistance_, forward_voltage_;
   int a_ = ground, k_ = ground, branch_ = ground, mode_ = ground;
   int slot_a_branch_ = -1, slot_k_branch_ = -1, slot_branch_a_ = -1, slot_branch_k_ = -1, slot_branch_branch_ = -1;

@@ -651,7 +651,15 @@ class Session {
       if (t_row >= t_after) return true;
       if (StopSignals::received()) return false;
       emit(t_row, integrator_->dense_output(t_row, waveforms_.unknowns_read()));
-      if (t_row == corner) corner = model_->next_time_event(corner);
+      if (t_row == corner) {
+        // A source's jump at a corner the step passed (it bends nothing with a state): the
+        // right limit too, as an event's two rows, from the time resolution after it.
+        if (model_->source_jumps_at(corner)) {
+          const double right = std::min(corner + padae::time_resolution(corner, integrator_options_), t_after);
+          emit(t_row, integrator_->dense_output(right, waveforms_.unknowns_read()));
+        }
+        corner = model_->next_time_event(corner);
+      }
       if (t_row == grid_point(next_grid_)) ++next_grid_;
     }
   }

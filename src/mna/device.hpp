@@ -253,6 +253,8 @@ class Device {
   virtual void forcing_rows(std::vector<int>& out) const { (void)out; }
   // The longest integration step that still resolves this device's own time dependence.
   virtual double resolution_step() const { return infinity; }
+  // Whether the device's time dependence jumps at t (see SourceFunction::jumps_at).
+  virtual bool jumps_at(double t) const { (void)t; return false; }
 
   // Energy accounting at jumps: stored energy, and energy delivered while `impulse` (the
   // integral of each unknown over the jump) passed.

@@ -252,6 +252,11 @@ bool Model::time_event_rows(double t, std::vector<int>& rows) const {
   return true;
 }
 
+bool Model::source_jumps_at(double t) const {
+  return std::any_of(time_dependent_devices_.begin(), time_dependent_devices_.end(),
+                     [&](const Device* d) { return d->jumps_at(t); });
+}
+
 double Model::resolution_step() const {
   double step = infinity;
   for (const Device* d : time_dependent_devices_) step = std::min(step, d->resolution_step());

@@ -50,6 +50,8 @@ class Model final : public padae::System {
   // The longest step that resolves every source's time dependence (a bound for
   // padae::Options::max_step: voltages that merely follow a source are not error-tested).
   double resolution_step() const;
+  // Whether a source jumps at t (a time event where the left and right limits differ).
+  bool source_jumps_at(double t) const;
 
   void set_tolerances(const Tolerances& tolerances) { tolerances_ = tolerances; }
   const CircuitSpec& circuit() const { return circuit_; }

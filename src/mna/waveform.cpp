@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -193,6 +194,19 @@ double SourceFunction::pwl_next_corner(double t) const {
     for (std::size_t k = 0; k < n; ++k)
       if (p_[2 * k] > *repeat_from_ && repetition_time(k, repetition) > t) return repetition_time(k, repetition);
   return infinity;
+}
+
+// PWL and PULSE are linear between corners: the right limit at t is the line through the next
+// piece's midpoint and end (the function is constant after its last corner). The others are
+// continuous.
+bool SourceFunction::jumps_at(double t) const {
+  if (shape_ != Waveform::Shape::piecewise_linear && shape_ != Waveform::Shape::pulse) return false;
+  const double next = next_corner(t);
+  const double end = std::isinf(next) ? t + 1 + std::abs(t) : next;
+  const double middle = value(t + (end - t) / 2), at_end = value(end);
+  const double right = std::isinf(next) ? at_end : 2 * middle - at_end;
+  // Beyond the rounding of the extrapolation.
+  return std::abs(right - value(t)) > 64 * std::numeric_limits<double>::epsilon() * (std::abs(middle) + std::abs(at_end));
 }
 
 double SourceFunction::resolution_step() const {

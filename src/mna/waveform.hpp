@@ -24,6 +24,9 @@ class SourceFunction {
   // SFFM's shortest (+infinity for the others, whose corners are time events and which are linear or
   // monotone in between).
   double resolution_step() const;
+  // Whether the function jumps at t (a PWL's two points at one time, a PULSE cut short by PW or
+  // PER): value(t) is the left limit there, and the right limit differs.
+  bool jumps_at(double t) const;
 
  private:
   struct PulseCorners {

@@ -340,6 +340,30 @@ TEST_F(Cli, GateDriveCornersAreRowsButEndNoStep) {
   EXPECT_EQ(corners, 4);
 }
 
+TEST_F(Cli, SourceJumpAtACornerNoStepEndsOnIsWrittenAsTwoRows) {
+  // Without a state no corner ends a step. v(a) follows its source: the PWL steps from 0 to 1 at
+  // 10 us (two points at one time) and ramps back to 0 from 20 us to 30 us; the PULSE (PER 3 us
+  // shorter than TR + PW + TF) falls from 2 to 0 at each period's start, 4 us and 7 us, and
+  // rises again in 1 ns. Each jump is two rows at its time (left and right limits), a kink one.
+  const Result r = run(write("jumps.cir", "* jumps\nV1 a 0 PWL(0 0 10u 0 10u 1 20u 1 30u 0)\nR1 a 0 1k\n"
+                                          "V2 b 0 PULSE(0 2 1u 1n 1n 10u 3u)\nR2 b 0 1k\n.tran 1u 9u\n.end\n") +
+                       " --tstop 32u --probe 'v(a),v(b)' -q");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv csv = parse_csv(r.out);
+  std::map<double, std::vector<std::vector<double>>> at;
+  for (const auto& row : csv.rows) at[row[0]].push_back(row);
+  ASSERT_EQ(at[10e-6].size(), 2u);
+  EXPECT_EQ(at[10e-6][0][1], 0.0);
+  EXPECT_EQ(at[10e-6][1][1], 1.0);
+  for (double start : {4e-6, 7e-6}) {
+    const auto& rows = at[start];
+    ASSERT_EQ(rows.size(), 2u) << "t = " << start;
+    EXPECT_EQ(rows[0][2], 2.0);
+    EXPECT_NEAR(rows[1][2], 0.0, 1e-9);  // the rise has begun, by 2 V x (16 ulp of t) / 1 ns
+  }
+  for (double kink : {1e-6, 20e-6, 30e-6}) EXPECT_EQ(at[kink].size(), 1u) << "t = " << kink;
+}
+
 TEST_F(Cli, BadInputExitsWithTwo) {
   EXPECT_EQ(run(path("missing.cir")).exit_code, 2);
   EXPECT_EQ(run("").exit_code, 2);

@@ -99,6 +99,23 @@ TEST(Waveform, PulseDefaultsFollowNgspice) {
   EXPECT_DOUBLE_EQ(f.next_corner(1e-6), 1e-3);
 }
 
+TEST(Waveform, PulseCutShortByItsPeriodJumpsAtThePeriodsStart) {
+  // TR + PW + TF = 12 us > PER = 3 us: each period starts while the last is still at V2.
+  SourceFunction f({Shape::pulse, {0, 2, 1e-6, 1e-9, 1e-9, 10e-6, 3e-6}}, 0, run, "v1");
+  EXPECT_FALSE(f.jumps_at(1e-6));  // the first rise starts from V1
+  EXPECT_FALSE(f.jumps_at(1e-6 + 1e-9));
+  int jumps = 0;
+  for (double t = f.next_corner(1e-6 + 1e-9); t < 301.5e-6; t = f.next_corner(t)) {
+    const double phase = std::fmod(t - 1e-6, 3e-6);  // near 0: a period's start; else the rise's end
+    const bool starts_period = std::min(phase, 3e-6 - phase) < 1e-12;
+    EXPECT_EQ(f.jumps_at(t), starts_period) << "t = " << t;
+    jumps += starts_period;
+  }
+  EXPECT_EQ(jumps, 100);
+  SourceFunction sine({Shape::sine, {0, 1, 1e3, 1e-4}}, 0, run, "v2");
+  EXPECT_FALSE(sine.jumps_at(1e-4));
+}
+
 TEST(Waveform, PulseCountStopsRepeating) {
   SourceFunction f({Shape::pulse, {0, 1, 0, 1e-6, 1e-6, 1e-6, 5e-6, 2}}, 0, run, "v1");
   EXPECT_DOUBLE_EQ(f.value(6.5e-6), 1);  // second pulse
@@ -174,6 +191,8 @@ TEST(Waveform, PiecewiseLinearRepeatsFromRAsNgspice) {
     return first_pass(1.25e-6 + std::fmod(t - 3.25e-6, 2e-6));
   };
   EXPECT_DOUBLE_EQ(f.value(3.25e-6), 0.5);  // the left limit at the jump
+  EXPECT_TRUE(f.jumps_at(3.25e-6));
+  for (double kink : {0.25e-6, 1.25e-6, 2.25e-6, 4.25e-6}) EXPECT_FALSE(f.jumps_at(kink)) << "t = " << kink;
   EXPECT_NEAR(f.value(3.5e-6), 0.75, 1e-12);
   EXPECT_NEAR(f.value(5.75e-6), 0.5, 1e-12);  // the second repetition, 0.5 us after r
   EXPECT_DOUBLE_EQ(f.next_corner(3e-6), 3.25e-6);
@@ -198,6 +217,7 @@ TEST(Waveform, RepeatedPiecewiseLinearJumpsJustAfterTheCornersItReports) {
   while ((t = f.next_corner(t)) < 3e-3) {
     const double phase = std::fmod(t, 3e-6) / 1e-6;  // near 0 (holds 0), 1 (rises) or 2 (falls)
     const double before = f.value(t), after = f.value(std::nextafter(t, 1.0));
+    EXPECT_EQ(f.jumps_at(t), std::abs(phase - 1) < 1e-6 || std::abs(phase - 2) < 1e-6) << "t = " << t;
     if (std::abs(phase - 1) < 1e-6) {
       EXPECT_EQ(before, 0) << "t = " << t;
       EXPECT_EQ(after, 1) << "t = " << t;

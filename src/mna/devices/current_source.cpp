@@ -26,6 +26,7 @@ class CurrentSource final : public Device {
       if (node != ground) out.push_back(node);
   }
   double resolution_step() const override { return function_.resolution_step(); }
+  bool jumps_at(double t) const override { return function_.jumps_at(t); }
 
  private:
   SourceFunction function_;

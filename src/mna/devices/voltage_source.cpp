@@ -33,6 +33,7 @@ class VoltageSource final : public Device {
   double next_time_event(double t) const override { return function_.next_corner(t); }
   void forcing_rows(std::vector<int>& out) const override { out.push_back(branch_); }
   double resolution_step() const override { return function_.resolution_step(); }
+  bool jumps_at(double t) const override { return function_.jumps_at(t); }
   // The branch current enters node a's side of the source: the source delivers -V i.
   double delivered_energy(double t, const Vector& impulse) const override {
     return -function_.value(t) * impulse[branch_];

@@ -364,6 +364,24 @@ TEST_F(Cli, SourceJumpAtACornerNoStepEndsOnIsWrittenAsTwoRows) {
   for (double kink : {1e-6, 20e-6, 30e-6}) EXPECT_EQ(at[kink].size(), 1u) << "t = " << kink;
 }
 
+TEST_F(Cli, CouplingsThatMakeAnIndefiniteInductanceMatrixAreRefused) {
+  // Each |k| <= 1, but L (1 - 0.9 - 0.9 ...) has the eigenvector (1, -1, -1) with eigenvalue
+  // 1 mH x (1 - 2 x 0.9) = -0.8 mH: windings of negative energy. Perfect coupling of all three
+  // (k = 1) is semidefinite, a transformer padsim runs.
+  const std::string windings = "V1 a 0 SIN(0 1 1k)\nR1 a b 1\nL1 b 0 1m\nL2 c 0 1m\nR2 c 0 10\nL3 d 0 1m\nR3 d 0 10\n";
+  const Result bad = run(write("indefinite.cir", "* windings\n" + windings +
+                                                     "K12 L1 L2 0.9\nK13 L1 L3 0.9\nK23 L2 L3 -0.9\n.tran 1u 2m\n.end\n") +
+                         " -o " + path("bad.csv"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("indefinite.cir:9:1: error: the couplings k12, k13, k23 make the inductance matrix of l1, l2, l3 "
+                         "indefinite (an eigenvalue of -0.0008 H)"),
+            std::string::npos)
+      << bad.err;
+  const Result perfect = run(write("perfect.cir", "* windings\n" + windings + "K12 L1 L2 1\nK13 L1 L3 1\nK23 L2 L3 1\n.tran 1u 2m\n.end\n") +
+                             " -o " + path("perfect.csv"));
+  EXPECT_EQ(perfect.exit_code, 0) << perfect.err;
+}
+
 TEST_F(Cli, BadInputExitsWithTwo) {
   EXPECT_EQ(run(path("missing.cir")).exit_code, 2);
   EXPECT_EQ(run("").exit_code, 2);

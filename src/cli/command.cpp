@@ -10,7 +10,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <regex>
 #include <set>
@@ -184,30 +183,6 @@ class Waveforms {
   std::vector<Probe> probes_;
   std::vector<double> values_;
   std::vector<int> read_;
-};
-
-// --events: one line per predicate flip; the energy is that the whole event's jump dissipated.
-class EventLog {
- public:
-  explicit EventLog(const std::string& path) : file_(path) {
-    if (!file_) throw std::runtime_error("cannot write the event log '" + path + "'");
-    file_ << "time,element,predicate,from,to,jump_energy\n";
-  }
-  void write(const mna::Model& model, const padae::EventRecord& event, double energy) {
-    for (const auto& flip : event.flips)
-      file_ << fmt::format("{},{},{},{},{},{}\n", event.t, field(model.predicate_owner(flip.predicate).name()),
-                           field(model.predicate_label(flip.predicate)), int(flip.from), int(flip.to), energy);
-  }
-  // RFC 4180: a label with a comma or a quote ("v(a,b)>0") is quoted, its quotes doubled.
-  static std::string field(const std::string& text) {
-    if (text.find_first_of(",\"\n") == std::string::npos) return text;
-    std::string quoted = "\"";
-    for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return quoted + "\"";
-  }
-
- private:
-  std::ofstream file_;
 };
 
 // A progress line on a terminal, after the first second.
@@ -487,7 +462,7 @@ class Session {
       }
       waveforms_.add(output::make_csv_writer(output));
       if (!options_.raw.empty()) waveforms_.add(output::make_raw_writer(options_.raw, !options_.raw_ascii, title_));
-      if (!options_.events.empty()) event_log_ = std::make_unique<EventLog>(options_.events);
+      if (!options_.events.empty()) event_log_ = output::make_event_writer(options_.events);
       waveforms_.begin(probes_);
     } catch (const std::exception& e) {
       print_error(e.what());
@@ -546,7 +521,7 @@ class Session {
             const padae::EventRecord& event = integrator_->last_event();
             if (waveforms_.differ(event.x_before, integrator_->state())) emit(outcome.t, event.x_before);
             emit(outcome.t, integrator_->state());
-            if (event_log_) event_log_->write(*model_, event, event.jumped ? model_->jump_dissipation(event) : 0.0);
+            if (event_log_) log_event(event);
             break;
           }
           case padae::StepKind::accepted:
@@ -558,6 +533,8 @@ class Session {
         }
         progress_->update(outcome.t);
       }
+    } catch (const output::WriteError& e) {
+      return write_failed(e);
     } catch (const std::exception& e) {
       return fail(integrator_->time(), e.what(), -1);
     }
@@ -569,7 +546,7 @@ class Session {
   // up to where it stopped, which the plot's title says; one stopped by a signal is not.
   int finish(int status) {
     if (progress_) progress_->clear();
-    waveforms_.finish();
+    status = close_outputs(status);
     const bool stopped = status == simulation_failure && !StopSignals::received();
     if (!options_.plot.empty() && stopped && !wrote_rows_) {
       print_error(fmt::format("plot: '{}' not written: no rows were computed", options_.plot));
@@ -621,6 +598,41 @@ class Session {
       const char* unit = ic.current ? "A" : "V";
       fmt::print(stderr, "padsim: warning: uic: the initial condition of {} ({:.6g} {}) is {:.6g} {} at t = 0+: the circuit "
                  "overrides it\n", ic.name, ic.given, unit, ic.at_x, unit);
+    }
+  }
+  // --events: a line per predicate flip, with the energy the whole event's jump dissipated.
+  void log_event(const padae::EventRecord& event) {
+    const double energy = event.jumped ? model_->jump_dissipation(event) : 0.0;
+    for (const auto& flip : event.flips)
+      event_log_->event(event.t, model_->predicate_owner(flip.predicate).name(), model_->predicate_label(flip.predicate),
+                        int(flip.from), int(flip.to), energy);
+  }
+  // A file that could not be written (disk full, file-size limit) stops the run: said with where
+  // the file now ends, its last whole row (or event), never a time past it.
+  int write_failed(const output::WriteError& e) {
+    if (progress_) progress_->clear();
+    const char* record = e.path() == options_.events ? "event" : "row";
+    std::string end = e.last_time() ? fmt::format("its last whole {} is at t = {} s", record, *e.last_time())
+                                    : fmt::format("it holds no {}s", record);
+    if (e.partial_tail()) end += ", and part of what followed it (it could not be cut back)";
+    print_error(fmt::format("{}; {}", e.what(), end));
+    if (e.path() == plot_csv_ && e.last_time()) last_row_ = *e.last_time();  // what the plot shows
+    return simulation_failure;
+  }
+  // Flushes and closes every output. A writer that fails throws once and is then only closed,
+  // so finishing again reaches the writers after it: each failure is reported.
+  int close_outputs(int status) {
+    for (;;) {
+      try {
+        waveforms_.finish();
+        if (event_log_) event_log_->finish();
+        return status;
+      } catch (const output::WriteError& e) {
+        status = write_failed(e);
+      } catch (const std::exception& e) {
+        print_error(e.what());
+        status = simulation_failure;
+      }
     }
   }
   void emit(double t, const mna::Vector& x) {
@@ -675,7 +687,7 @@ class Session {
   std::unique_ptr<mna::Model> model_;
   std::vector<Probe> probes_;
   Waveforms waveforms_;
-  std::unique_ptr<EventLog> event_log_;
+  std::unique_ptr<output::EventWriter> event_log_;
   std::string plot_csv_;
   std::filesystem::path temporary_csv_;
   std::unique_ptr<padae::Integrator> integrator_;
@@ -695,6 +707,9 @@ std::optional<padae::Method> parse_method(const std::string& name) {
 
 int run_command(const CommandOptions& options) {
   const StopSignals signals;
+  // A file-size limit (ulimit -f) then fails the write with EFBIG, which is reported with where
+  // the output ends, instead of killing padsim without a word.
+  std::signal(SIGXFSZ, SIG_IGN);
   Session session(options);
   int status = session.load();
   if (status == success) status = session.open_outputs();

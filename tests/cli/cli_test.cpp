@@ -108,9 +108,11 @@ class Cli : public ::testing::Test {
     const std::size_t at = stats.find("\"" + key + "\": ");
     return at == std::string::npos ? -1L : std::atol(stats.c_str() + at + key.size() + 4);
   }
-  Result run(const std::string& arguments) {
+  // padsim `arguments`, after the shell commands `before` (a ulimit).
+  Result run(const std::string& arguments, const std::string& before = "") {
     const std::string out = path("stdout.txt"), err = path("stderr.txt");
-    const int status = std::system((std::string(PADSIM_EXECUTABLE) + " " + arguments + " > " + out + " 2> " + err).c_str());
+    const int status =
+        std::system((before + std::string(PADSIM_EXECUTABLE) + " " + arguments + " > " + out + " 2> " + err).c_str());
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read(out), read(err)};
   }
   struct Waveform {
@@ -984,6 +986,58 @@ TEST_F(Cli, SigtermWritesTheRowsAndEndsBySignal) {
   ASSERT_GT(rows.rows.size(), 2u);
   EXPECT_NEAR(rows.rows.back()[0], t_stop, 1e-6 * std::max(1.0, t_stop));
   for (const auto& row : rows.rows) ASSERT_EQ(row.size(), 2u);
+}
+
+// A file that cannot be written mid-run (here a file-size limit, ulimit -f; a full disk alike):
+// the run stops with exit 1, the file is cut back to whole lines, and the message names the time
+// of its last one. SIGXFSZ killed padsim without a word, a full disk left a line cut inside a
+// number (which still parsed, to another value) under a message giving a later time, and the
+// event log's failures were not seen at all (exit 0).
+TEST_F(Cli, WriteFailureLeavesWholeLinesAndSaysWhereTheFileEnds) {
+  // The last line's time, as the message gives it: "... is at t = <time> s".
+  auto expect_ends_at_last_line = [](const std::string& text, const std::string& err, const std::string& message,
+                                     std::size_t fields) {
+    ASSERT_FALSE(text.empty());
+    EXPECT_EQ(text.back(), '\n');
+    std::istringstream lines(text);
+    std::string line, last;
+    std::getline(lines, line);  // the header
+    while (std::getline(lines, line)) {
+      EXPECT_EQ(static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) + 1, fields) << line;
+      last = line;
+    }
+    ASSERT_FALSE(last.empty()) << "no line after the header";
+    const std::size_t at = err.find(message);
+    ASSERT_NE(at, std::string::npos) << err;
+    EXPECT_EQ(err.substr(at + message.size(), err.find(" s\n", at) - at - message.size()), last.substr(0, last.find(',')))
+        << err;
+  };
+  const std::string long_run = write("long.cir", "* RC, tau = 1 s, for 1000 s\nC1 x 0 1 IC=1\nR1 x 0 1\n.tran 1u 1000 0 1u uic\n.end\n");
+  const std::string csv = path("long.csv");
+  const Result r = run(long_run + " -o " + csv + " -q", "ulimit -f 200; ");  // 100 KiB
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(r.err.find("simulation failed"), std::string::npos) << r.err;
+  expect_ends_at_last_line(read(csv), r.err, "cannot write '" + csv + "': File too large; its last whole row is at t = ", 2);
+  for (const auto& row : parse_csv(read(csv)).rows) EXPECT_NEAR(row[1], std::exp(-row[0]), 1e-6) << row[0];
+  // The last flush, at the end of a short run, fails alike (it aborted uncaught).
+  const std::string rc = path("rc.csv");
+  const Result end = run(write("rc.cir", rc_netlist) + " -o " + rc + " -q", "ulimit -f 1; ");  // 512 bytes
+  EXPECT_EQ(end.exit_code, 1) << end.err;
+  EXPECT_NE(end.err.find("cannot write '" + rc + "': File too large; it holds no rows"), std::string::npos) << end.err;
+  EXPECT_EQ(read(rc), "time,v(in),v(out),i(v1)\n");
+
+  // 40,000 switchings, 1.3 MB of event log.
+  const std::string pwm = write("pwm.cir", "* pwm\nV1 c 0 PULSE(0 1 0 10n 10n 0.5u 1u)\nS1 a 0 c 0 sw\nV2 b 0 1\nR1 b a 1k\n"
+                                           ".model sw SW(vt=0.5)\n.tran 1u 20m\n.end\n");
+  const std::string events = path("events.csv");
+  const Result e = run(pwm + " -o /dev/null --events " + events + " -q", "ulimit -f 200; ");
+  EXPECT_EQ(e.exit_code, 1) << e.err;
+  expect_ends_at_last_line(read(events), e.err, "cannot write '" + events + "': File too large; its last whole event is at t = ", 6);
+  if (fs::exists("/dev/full")) {
+    const Result full = run(pwm + " -o /dev/null --events /dev/full");
+    EXPECT_EQ(full.exit_code, 2) << full.err;
+    EXPECT_NE(full.err.find("cannot write '/dev/full': No space left on device"), std::string::npos) << full.err;
+  }
 }
 
 TEST_F(Cli, PlotWritesPng) {

@@ -168,7 +168,7 @@ class CsvWriter final : public WaveformWriter {
     }
     *end++ = '\n';
     out.resize(static_cast<std::size_t>(end - out.data()));
-    sink_.commit();
+    sink_.commit(t);
   }
 
   void finish() override { sink_.close(); }

@@ -48,7 +48,24 @@ void FileSink::fail(const char* what) {
   throw std::runtime_error(fmt::format("{} '{}': {}", what, path_, std::strerror(errno)));
 }
 
-bool FileSink::commit() {
+void FileSink::fail_write(std::int64_t flushed) {
+  const int reason = errno;
+  failed_ = true;
+  buffer_.clear();
+  // The failed flush's bytes that reached the file (the last record in part, after a short
+  // write) are cut back off: at the file's offset less them, which is also right for a file
+  // opened for appending (standard output, >>). A pipe cannot be cut.
+  bool partial_tail = false;
+  if (flushed > 0) {
+    const off_t end = ::lseek(fd_, 0, SEEK_CUR);
+    partial_tail = !(end >= flushed && ::ftruncate(fd_, end - flushed) == 0);
+  }
+  throw WriteError(fmt::format("cannot write '{}': {}", path_, std::strerror(reason)), path_, last_time_on_disk_,
+                   partial_tail);
+}
+
+bool FileSink::commit(double t) {
+  last_time_ = t;
   if (buffer_.size() >= flush_bytes) {
     flush();
     return true;
@@ -67,17 +84,19 @@ void FileSink::flush() {
   }
   const char* p = buffer_.data();
   std::size_t left = buffer_.size();
+  std::int64_t flushed = 0;
   while (left > 0) {
     ssize_t n = ::write(fd_, p, left);
     if (n < 0) {
       if (errno == EINTR) continue;
-      buffer_.clear();
-      fail("cannot write");
+      fail_write(flushed);
     }
     p += n;
     left -= static_cast<std::size_t>(n);
-    written_ += n;
+    flushed += n;
   }
+  written_ += flushed;
+  last_time_on_disk_ = last_time_;
   buffer_.clear();
   last_flush_ = coarse_now();
 }
@@ -90,7 +109,7 @@ void FileSink::pwrite_at(std::int64_t offset, std::string_view bytes) {
                          static_cast<off_t>(offset + static_cast<std::int64_t>(done)));
     if (n < 0) {
       if (errno == EINTR) continue;
-      fail("cannot write");
+      fail_write(0);
     }
     done += static_cast<std::size_t>(n);
   }

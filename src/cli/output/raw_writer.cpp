@@ -84,7 +84,7 @@ class RawWriter final : public WaveformWriter {
       out.push_back('\n');
     }
     ++points_;
-    if (sink_.commit()) patch_count(points_);
+    if (sink_.commit(t)) patch_count(points_);
   }
 
   void finish() override {

@@ -4,6 +4,7 @@
 // file under devices/ and registers a factory for its element letter (gnucap-style).
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -182,13 +183,21 @@ enum class Connection {
   capacitive,       // C: a path only in transient
   voltage_defined,  // V, E, H, B with V=: a DC path that fixes the voltage (loops are singular)
   inductive,        // L: a DC short (a loop with voltage sources is singular at DC)
-  current_defined,  // I, F, G, B with I=: no path
+  current_defined,  // I, F, G, B with I=: no path (but see current_source_connection)
 };
 struct Edge {
   int a, b;
   Connection connection;
   std::string element;
 };
+
+// A current source from a to b whose current reads the voltage of a or b (G1 a 0 a 0 1m,
+// B1 a 0 I={v(a)/1k}: a conductance) ties that node down: conductive. Otherwise current-defined.
+inline Connection current_source_connection(int a, int b, const std::vector<int>& unknowns_read) {
+  const bool reads_own_node = std::any_of(unknowns_read.begin(), unknowns_read.end(),
+                                          [&](int u) { return u != ground && (u == a || u == b); });
+  return reads_own_node ? Connection::conductive : Connection::current_defined;
+}
 
 // A device keeps only what its evaluation reads; its name, node names and cold parameters stay
 // on its card, which the model keeps for the device's lifetime. An evaluation streams through

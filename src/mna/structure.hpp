@@ -14,7 +14,8 @@ enum class StartKind {
 // Throws ModelError when
 //  - a node has no path to ground (DC path for the operating point: not through capacitors or
 //    current sources; any path but current sources for uic), naming the nodes and, when
-//    current sources cut them off, those sources;
+//    current sources cut them off, those sources (one whose current reads the voltage of a node
+//    it connects, G1 a 0 a 0, is a conductance: a path);
 //  - voltage sources (E, H, B with V= included) form a loop, with inductors too for the
 //    operating point, naming the loop's elements.
 // Switches and diodes count as paths (either state may hold); an RON = 0 switch closing a

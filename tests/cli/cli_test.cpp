@@ -677,6 +677,33 @@ TEST_F(Cli, ShockleyDiodeMatchesNgspice) {
   }
 }
 
+// A current source whose current reads the voltage across its own nodes is a conductance, here
+// the only DC path from a (ngspice's idioms of a behavioral resistor): they were refused as "a
+// cut-set of current sources"; they run, and match ngspice's run.
+TEST_F(Cli, CurrentSourcesReadingTheirOwnNodesRunAsConductancesAsInNgspice) {
+  if (std::system("command -v ngspice > /dev/null 2>&1") != 0) GTEST_SKIP() << "ngspice not installed";
+  for (const std::string source : {"G1 a 0 a 0 1m\n", "B1 a 0 I={v(a)/1k + v(a)*v(a)*v(a)/1k}\n"}) {
+    const std::string circuit = "I1 0 a PWL(0 0 1m 2m)\n" + source;
+    const std::vector<std::vector<double>> reference =
+        ngspice_rows(circuit + ".tran 1u 1m 0 1u\n.options reltol=1e-7 abstol=1e-14 vntol=1e-10\n", "v(a)");
+    ASSERT_GT(reference.size(), 100u) << source;
+    const std::string csv_path = path("padsim.csv");
+    const Result r = run(write("self.cir", "* self\n" + circuit + ".tran 1u 1m\n.end\n") + " --grid --probe 'v(a)' -o " + csv_path);
+    ASSERT_EQ(r.exit_code, 0) << source << r.err;
+    const Csv csv = parse_csv(read(csv_path));
+    // padsim's rows against ngspice's points interpolated linearly.
+    std::size_t k = 1;
+    for (const auto& row : csv.rows) {
+      while (k + 1 < reference.size() && reference[k][0] < row[0]) ++k;
+      const auto& before = reference[k - 1];
+      const auto& after = reference[k];
+      const double w = after[0] > before[0] ? std::clamp((row[0] - before[0]) / (after[0] - before[0]), 0.0, 1.0) : 1;
+      EXPECT_NEAR(row[1], before[1] + w * (after[1] - before[1]), 1e-6) << source << " at t = " << row[0];
+    }
+    EXPECT_NEAR(csv.rows.back()[1], source[0] == 'G' ? 2.0 : 1.0, 1e-9) << source;  // v(a) (+ v(a)^3) = 2
+  }
+}
+
 // A transformer's centre-tapped secondary whose common mode only 1 MOhm ties to ground, its
 // diodes' junction capacitances (1 nF) ringing with the leakage inductance: in the steps of the
 // ringing C / h swamps the 1 uS in every row, and rounding resolves the common mode to about

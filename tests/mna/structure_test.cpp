@@ -127,6 +127,30 @@ TEST(Structure, OneElementCutSetSaysConnects) {
   EXPECT_NE(error.find("no DC path to ground from node(s) mid, x; only c1 connects them"), std::string::npos) << error;
 }
 
+// A current source whose current reads the voltage across its own nodes is a conductance
+// (G1 a 0 a 0 1m, B1 a 0 I={v(a)/1k}; ngspice runs both): it ties the node down as a resistor
+// would. They were refused as a cut-set of current sources. One reading another node is not.
+TEST(Structure, CurrentSourceReadingItsOwnNodesIsAPath) {
+  CircuitSpec g;
+  g.add("i1", {"0", "a"}, 1e-3);
+  g.add("g1", {"a", "0", "a", "0"}, 1e-3);
+  EXPECT_EQ(structure_error(g, StartKind::operating_point), "");
+  EXPECT_EQ(structure_error(g, StartKind::initial_conditions), "");
+  CircuitSpec b;
+  b.add("i1", {"0", "a"}, 1e-3);
+  auto& b1 = b.add("b1", {"a", "0"});
+  b1.expression = binary(netlist::BinaryOperator::divide, voltage("a"), number(1e3));
+  b1.expression_is_current = true;
+  EXPECT_EQ(structure_error(b, StartKind::operating_point), "");
+  CircuitSpec other;
+  other.add("i1", {"0", "a"}, 1e-3);
+  other.add("g1", {"a", "0", "b", "0"}, 1e-3);
+  other.add("r1", {"b", "0"}, 1e3);
+  EXPECT_NE(structure_error(other, StartKind::operating_point).find("no DC path to ground from node(s) a; only i1, g1 connect"),
+            std::string::npos)
+      << structure_error(other, StartKind::operating_point);
+}
+
 padae::Predicates no_predicates(const Model& m) { return padae::Predicates(static_cast<std::size_t>(m.predicate_count()), 0); }
 
 TEST(Structure, SingularLinearEquationsNameTheUndeterminedUnknowns) {

@@ -53,7 +53,8 @@ class BehavioralSource final : public PredicateDevice {
     for (std::size_t k = 0; k < gradient_.size(); ++k) e.df(slots_a_[k], -gradient_[k]);
   }
   void edges(std::vector<Edge>& out) const override {
-    out.push_back({a_, b_, is_current_ ? Connection::current_defined : Connection::voltage_defined, name()});
+    out.push_back({a_, b_, is_current_ ? current_source_connection(a_, b_, expression_->inputs()) : Connection::voltage_defined,
+                   name()});
   }
   int predicate_count() const override { return expression_ ? expression_->predicate_count() : 0; }
   std::string predicate_label(int local) const override { return expression_->predicate_label(local); }

@@ -23,7 +23,8 @@ class Vccs final : public Device {
     if (e.jacobian()) e.df(slots_[0], gain_), e.df(slots_[1], -gain_), e.df(slots_[2], -gain_), e.df(slots_[3], gain_);
   }
   void edges(std::vector<Edge>& out) const override {
-    out.push_back({n_[0], n_[1], Connection::current_defined, name()});
+    const std::vector<int> read = gain_ != 0 ? std::vector<int>{n_[2], n_[3]} : std::vector<int>{};
+    out.push_back({n_[0], n_[1], current_source_connection(n_[0], n_[1], read), name()});
   }
 
  private:

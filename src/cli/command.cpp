@@ -236,6 +236,19 @@ std::string unresolved_source_detail(const mna::Model& model, const padae::Optio
   return "";
 }
 
+// Where in the netlist an mna error is: its element's card, or the .ic of its node (the last,
+// which is the one in force); null where it is about no card.
+const netlist::SourceRange* card_at_fault(const netlist::FlatCircuit& flat, const mna::ModelError& e) {
+  const netlist::SourceRange* where = nullptr;
+  if (!e.initial_condition().empty()) {
+    for (const netlist::NodeValue& ic : flat.initial_conditions)
+      if (ic.node == e.initial_condition()) where = &ic.where;
+  } else if (const netlist::FlatElement* element = e.element().empty() ? nullptr : flat.find_element(e.element())) {
+    where = &element->where;
+  }
+  return where && where->begin.file ? where : nullptr;
+}
+
 std::string blame(const mna::Model& model, int unknown) {
   if (unknown < 0 || unknown >= model.size()) return "";
   const auto& u = model.unknowns();
@@ -394,9 +407,8 @@ class Session {
       else if (!flat->saves.empty()) probes_ = requested_probes(flat->saves, *model_);
       else probes_ = default_probes(*model_);
     } catch (const mna::ModelError& e) {
-      const netlist::FlatElement* element = e.element().empty() ? nullptr : flat->find_element(e.element());
-      if (element && element->where.begin.file)
-        fmt::print(stderr, "{}", netlist::format({netlist::Severity::error, element->where, e.what()}));
+      if (const netlist::SourceRange* where = card_at_fault(*flat, e))
+        fmt::print(stderr, "{}", netlist::format({netlist::Severity::error, *where, e.what()}));
       else
         print_error(e.what());
       return bad_input;

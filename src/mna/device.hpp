@@ -28,11 +28,20 @@ class ModelError : public std::runtime_error {
  public:
   explicit ModelError(const std::string& message, std::string element = "")
       : std::runtime_error(message), element_(std::move(element)) {}
+  // An error in the .ic of a node.
+  static ModelError at_initial_condition(const std::string& message, std::string node) {
+    ModelError error(message);
+    error.initial_condition_ = std::move(node);
+    return error;
+  }
   // The element at fault, where there is one: the command points at its card.
   const std::string& element() const { return element_; }
+  // The node whose .ic is at fault, where it is one: the command points at that .ic.
+  const std::string& initial_condition() const { return initial_condition_; }
 
  private:
   std::string element_;
+  std::string initial_condition_;
 };
 
 constexpr int ground = -1;  // the index of the reference node: never an unknown

@@ -93,6 +93,29 @@ void check_edges(const Model& model, StartKind start, std::vector<Edge> edges, c
     }
     forest.push_back(e);
   }
+  // The operating point holds the .ic node voltages, each like a source to ground: one on a node
+  // those branches (or another .ic) fix already closes a loop with them.
+  if (dc)
+    for (const auto& [node, value] : model.circuit().initial_voltages) {
+      const Edge held{model.find_node(node), ground_vertex, Connection::voltage_defined, ".ic v(" + node + ")"};
+      if (held.a < 0) continue;
+      if (!loops.join(held.a, held.b)) {
+        const std::vector<Edge> fixing = path_edges(forest, n + 1, held.b, held.a);  // from the node on
+        std::vector<std::string> names, branches;  // branches: the elements among them
+        for (const Edge& f : fixing) {
+          names.push_back(f.element);
+          if (!f.element.starts_with(".ic ")) branches.push_back(f.element);
+        }
+        throw ModelError::at_initial_condition(
+            context + held.element + " is on a node that " + join_names(names) + (names.size() == 1 ? " fixes" : " fix") +
+                (loop_kind(fixing) != "loop of voltage sources" ? " (inductors are shorts at DC)" : "") +
+                ": the operating point holds .ic voltages, which leaves the current" +
+                (branches.size() == 1 ? " of " : "s of ") + join_names(branches) +
+                " undetermined; drop this .ic, or start from initial conditions (uic)",
+            node);
+      }
+      forest.push_back(held);
+    }
 
   // Paths to ground.
   DisjointSets paths(n + 1);

@@ -17,7 +17,9 @@ enum class StartKind {
 //    current sources cut them off, those sources (one whose current reads the voltage of a node
 //    it connects, G1 a 0 a 0, is a conductance: a path);
 //  - voltage sources (E, H, B with V= included) form a loop, with inductors too for the
-//    operating point, naming the loop's elements.
+//    operating point, naming the loop's elements;
+//  - for the operating point, which holds them, a .ic voltage is on a node those fix already
+//    (ModelError::initial_condition() names its node).
 // Switches and diodes count as paths (either state may hold); an RON = 0 switch closing a
 // loop of voltage sources is only found when it happens (the integrator reports it).
 void check_structure(const Model& model, StartKind start);

@@ -981,6 +981,21 @@ TEST_F(Cli, SingularLinearCircuitIsBadInput) {
   EXPECT_NE(r.err.find("do not determine v(a), i(e1)"), std::string::npos) << r.err;
 }
 
+// .ic on a node a source fixes is bad input at the .ic (file:line:column), naming the source:
+// it was "the circuit equations are singular at the operating point ... do not determine i(v1)".
+TEST_F(Cli, InitialConditionOnANodeASourceFixesIsBadInputAtTheIc) {
+  const std::string netlist =
+      write("ic.cir", "* .ic on every node\nV1 a 0 PULSE(0 1 0 1u)\nR1 a b 1k\nC1 b 0 1u\n.ic v(b)=0 v(a)=0\n.tran 1u 1m\n.end\n");
+  const Result r = run(netlist + " -o " + path("o.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(netlist + ":5:14: error: .ic v(a) is on a node that v1 fixes"), std::string::npos) << r.err;
+  // With uic the .ic is a starting value, not held: the run goes on.
+  EXPECT_EQ(run(write("uic.cir", std::string(read(netlist)).replace(read(netlist).find("1m\n"), 3, "1m uic\n")) + " -q -o " +
+                path("o.csv"))
+                .exit_code,
+            0);
+}
+
 TEST_F(Cli, SigtermWritesTheRowsAndEndsBySignal) {
   // A run of hours; SIGTERM once rows are on disk: padsim writes what it has, says when it
   // stopped, and dies of SIGTERM (a shell sees 128 + 15).

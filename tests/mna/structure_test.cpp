@@ -151,6 +151,43 @@ TEST(Structure, CurrentSourceReadingItsOwnNodesIsAPath) {
       << structure_error(other, StartKind::operating_point);
 }
 
+// The operating point holds .ic node voltages: one on a node a V or E source (or an inductor,
+// a short at DC) fixes leaves that source's current undetermined. It was found only as singular
+// equations ("do not determine i(v1)"), the .ic unnamed; the error is now at the .ic.
+TEST(Structure, InitialConditionOnANodeASourceFixesNamesTheIcAndTheSource) {
+  auto held_error = [](const CircuitSpec& c) -> std::pair<std::string, std::string> {
+    Model model(c, {.tstep = 1e-6, .tstop = 1e-3});
+    EXPECT_NO_THROW(check_structure(model, StartKind::initial_conditions));  // uic holds nothing
+    try {
+      check_structure(model, StartKind::operating_point);
+    } catch (const ModelError& e) {
+      return {e.what(), e.initial_condition()};
+    }
+    return {};
+  };
+  CircuitSpec rc;
+  rc.add("v1", {"a", "0"}, 1);
+  rc.add("r1", {"a", "b"}, 1e3);
+  rc.add("c1", {"b", "0"}, 1e-6);
+  rc.initial_voltages = {{"a", 0}, {"b", 0}};
+  const auto [message, node] = held_error(rc);
+  EXPECT_EQ(message, ".ic v(a) is on a node that v1 fixes: the operating point holds .ic voltages, which leaves the "
+                     "current of v1 undetermined; drop this .ic, or start from initial conditions (uic)");
+  EXPECT_EQ(node, "a");
+  rc.initial_voltages = {{"b", 0}};
+  EXPECT_EQ(held_error(rc).first, "");
+  CircuitSpec e;
+  e.add("v1", {"in", "0"}, 1);
+  e.add("r0", {"in", "0"}, 1e3);
+  e.add("e1", {"x", "a", "in", "0"}, 2.0);
+  e.add("l1", {"x", "0"}, 1e-3);
+  e.add("r1", {"a", "0"}, 1e3);
+  e.initial_voltages = {{"a", 2}};
+  EXPECT_EQ(held_error(e).first,
+            ".ic v(a) is on a node that e1, l1 fix (inductors are shorts at DC): the operating point holds .ic voltages, "
+            "which leaves the currents of e1, l1 undetermined; drop this .ic, or start from initial conditions (uic)");
+}
+
 padae::Predicates no_predicates(const Model& m) { return padae::Predicates(static_cast<std::size_t>(m.predicate_count()), 0); }
 
 TEST(Structure, SingularLinearEquationsNameTheUndeterminedUnknowns) {

@@ -131,8 +131,10 @@ double SourceFunction::value(double t) const {
     }
     case Waveform::Shape::exponential: {
       const double v1 = p_[0], v2 = p_[1], td1 = p_[2], tau1 = p_[3], td2 = p_[4], tau2 = p_[5];
-      double v = v1;
-      if (t > td1) v += (v2 - v1) * (1 - std::exp(-(t - td1) / tau1));
+      // Nothing moves before TD1, the fall included (ngspice's vsrcload.c): with TD2 < TD1 the
+      // value holds V1 up to TD1, then jumps to where both terms are.
+      if (t <= td1) return v1;
+      double v = v1 + (v2 - v1) * (1 - std::exp(-(t - td1) / tau1));
       if (t > td2) v += (v1 - v2) * (1 - std::exp(-(t - td2) / tau2));
       return v;
     }
@@ -200,6 +202,8 @@ double SourceFunction::pwl_next_corner(double t) const {
 // piece's midpoint and end (the function is constant after its last corner). The others are
 // continuous.
 bool SourceFunction::jumps_at(double t) const {
+  // An EXP whose fall began before its rise (TD2 < TD1) jumps at TD1 to where both terms are.
+  if (shape_ == Waveform::Shape::exponential) return t == p_[2] && p_[4] < p_[2] && p_[0] != p_[1];
   if (shape_ != Waveform::Shape::piecewise_linear && shape_ != Waveform::Shape::pulse) return false;
   const double next = next_corner(t);
   const double end = std::isinf(next) ? t + 1 + std::abs(t) : next;

@@ -25,7 +25,8 @@ class SourceFunction {
   // monotone in between).
   double resolution_step() const;
   // Whether the function jumps at t (a PWL's two points at one time, a PULSE cut short by PW or
-  // PER): value(t) is the left limit there, and the right limit differs.
+  // PER, an EXP at TD1 when TD2 < TD1): value(t) is the left limit there, and the right limit
+  // differs.
   bool jumps_at(double t) const;
 
  private:

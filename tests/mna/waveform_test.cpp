@@ -164,6 +164,23 @@ TEST(Waveform, ExponentialRiseAndFall) {
   EXPECT_DOUBLE_EQ(f.next_corner(1e-6), 5e-6);
 }
 
+// TD2 before TD1: ngspice holds V1 up to TD1, then jumps to both terms at once (vsrcload.c).
+// padsim applied the fall from TD2 on, below V1 before the rise began. The numbers are ngspice
+// 39's run of V1 x 0 EXP(0 1 1m 10u 0.5m 20u) with .tran 1u 2m 0 1u.
+TEST(Waveform, ExponentialWithTd2BeforeTd1HoldsV1UntilTd1AsNgspice) {
+  SourceFunction f({Shape::exponential, {0, 1, 1e-3, 10e-6, 0.5e-3, 20e-6}}, 0, run, "v1");
+  EXPECT_EQ(f.value(0.75e-3), 0);
+  EXPECT_EQ(f.value(1e-3), 0);  // the left limit at the jump
+  EXPECT_NEAR(f.value(1.00028e-3), -9.72388367e-01, 1e-8);
+  EXPECT_NEAR(f.value(1.00328e-3), -7.20363020e-01, 1e-8);
+  EXPECT_NEAR(f.value(1.00928e-3), -3.95343607e-01, 1e-8);
+  EXPECT_DOUBLE_EQ(f.next_corner(0), 1e-3);
+  EXPECT_EQ(f.next_corner(1e-3), infinity);
+  EXPECT_TRUE(f.jumps_at(1e-3));  // written as two rows where no step ends there
+  EXPECT_FALSE(f.jumps_at(0.5e-3));
+  EXPECT_FALSE(SourceFunction({Shape::exponential, {0, 1, 1e-6, 2e-6, 5e-6, 1e-6}}, 0, run, "v2").jumps_at(1e-6));
+}
+
 TEST(Waveform, PiecewiseLinearInterpolatesAndHoldsEnds) {
   SourceFunction f({Shape::piecewise_linear, {1e-6, 0, 2e-6, 4, 4e-6, 4, 5e-6, -1}}, 0, run, "v1");
   EXPECT_DOUBLE_EQ(f.value(0), 0);

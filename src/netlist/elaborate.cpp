@@ -139,14 +139,21 @@ struct Definitions {
   }
 };
 
-// Registers the subcircuits defined in a body (its cards); a second one of a name is an error.
+// Registers the subcircuits defined in a body (its cards); a second one of a name is an error, as
+// is a port named twice (which of the instance's nodes it is would be arbitrary).
 void define_subcircuits(const std::vector<const ast::Card*>& cards, Definitions& definitions,
                         Diagnostics& diagnostics) {
   for (const ast::Card* card : cards)
-    if (auto* subcircuit = std::get_if<ast::Subcircuit>(&card->node))
+    if (auto* subcircuit = std::get_if<ast::Subcircuit>(&card->node)) {
       if (!definitions.subcircuits.emplace(subcircuit->name.text, subcircuit).second)
         diagnostics.error(subcircuit->name.where,
                           "subcircuit '" + subcircuit->name.text + "' is defined twice");
+      const std::vector<ast::Word>& ports = subcircuit->ports;
+      for (auto port = ports.begin(); port != ports.end(); ++port)
+        if (std::any_of(ports.begin(), port, [&](const ast::Word& earlier) { return earlier.text == port->text; }))
+          diagnostics.error(port->where,
+                            "port '" + port->text + "' of subcircuit '" + subcircuit->name.text + "' is named twice");
+    }
 }
 
 // The subcircuit hierarchy, checked before elaboration builds anything: an instance of a subcircuit

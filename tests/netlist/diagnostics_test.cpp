@@ -82,6 +82,8 @@ const Malformed malformed[] = {
     {"t\n.subckt sub p\nR1 p 0 1\n.ends\nX1 a sub w=1\n", 5, 10,
      "subcircuit 'sub' has no parameter 'w'"},
     {"t\n.subckt loop p\nX1 p loop\n.ends\nX1 a loop\n", 3, 6, "subcircuit 'loop' instantiates itself"},
+    // A port named twice was bound to the instance's last node of the two (ngspice: the first).
+    {"t\n.subckt s2 a A\nR1 a 0 1\n.ends\nX2 vdd 0 s2\n", 2, 14, "port 'a' of subcircuit 's2' is named twice"},
     {"t\n.param a={b} b={a}\n", 2, 8, "parameter cycle: a -> b -> a"},
     {"t\nR1 a b {k}\n", 2, 9, "parameter 'k' is not defined"},
     {"t\nR1 a b 1\nR1 c d 2\n", 3, 1, "element 'r1' is defined twice"},

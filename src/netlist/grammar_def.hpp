@@ -146,6 +146,17 @@ inline auto const make_word = [](auto& context) {
                             card_of(context).range(range.begin(), range.end())};
 };
 
+// A name (node, element, model) is printable: a control byte (a NUL from a binary file) would
+// reach the CSV header and every message that names it.
+inline auto const make_name = [](auto& context) {
+  auto const& range = _attr(context);
+  const auto control = std::find_if(range.begin(), range.end(), [](unsigned char c) { return c < 0x20 || c == 0x7f; });
+  if (control != range.end())
+    throw CardError{card_of(context).range(control, control + 1),
+                    "the name " + quote(std::string(range.begin(), range.end())) + " contains a control character"};
+  make_word(context);
+};
+
 inline auto const make_path = [](auto& context) {  // file paths keep their case and lose quotes
   auto const& range = _attr(context);
   std::string text(range.begin(), range.end());
@@ -249,7 +260,7 @@ inline auto const make_call = [](auto& context) {
   auto function = std::find_if(functions.begin(), functions.end(),
                                [&](const FunctionArity& f) { return f.name == name.text; });
   if (function == functions.end())
-    throw CardError{range, "unknown function '" + name.text + "'"};
+    throw CardError{range, "unknown function " + quote(name.text)};
   if (arguments.size() != function->arguments)
     throw CardError{range,
                     "function '" + name.text + "' takes " + std::to_string(function->arguments) +
@@ -389,7 +400,7 @@ x3::rule<class value_id, ExpressionPtr> const value = "a value";
 x3::rule<class end_id> const end_of_card = "end of card";
 
 // A lone '$' starts an inline comment (lines.cpp), so it is no name: printed back, it would be one.
-auto const name_def = x3::raw[lexeme[!(lit('$') >> !name_char) >> +name_char]][make_word];
+auto const name_def = x3::raw[lexeme[!(lit('$') >> !name_char) >> +name_char]][make_name];
 auto const node_def = name_def;
 auto const element_name_def = name_def;
 auto const model_name_def = name_def;

@@ -27,7 +27,7 @@ std::string CardContext::token(Iterator where) const {
 
 void CardContext::expected(Iterator where, const std::string& what) const {
   if (what == "end of card")
-    diagnostics_.error(token_range(where), "unexpected '" + token(where) + "'");
+    diagnostics_.error(token_range(where), "unexpected " + quote(token(where)));
   else
     diagnostics_.error(token_range(where), "expected " + what);
 }
@@ -413,7 +413,7 @@ class Parser {
     auto& include = std::get<ast::Include>(parsed.card->node);
     if (include.directive.text != "lib") include.directive.text = "include";
     if (include.directive.text == "include" && include.section) {
-      diagnostics_.error(include.section->where, "unexpected '" + include.section->text + "'");
+      diagnostics_.error(include.section->where, "unexpected " + quote(include.section->text));
       parsed.card.reset();
       return parsed;
     }

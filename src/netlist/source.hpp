@@ -55,7 +55,17 @@ class Diagnostics {
   int error_count_ = 0;
 };
 
-// "file:line:column: error: message", then the source line and a caret under the range.
+// "file:line:column: error: message", then the source line and a caret under the range. Both
+// are printable: control bytes, C1 controls and bytes that are no UTF-8 show as \xNN (tabs stay
+// in the line, to align the caret). A line longer than kShownCharacters is shown from
+// kShownBefore characters before the range on, "..." where it is cut.
+constexpr std::size_t kShownCharacters = 120;
+constexpr std::size_t kShownBefore = 40;
 std::string format(const Diagnostic& diagnostic);
+
+// Netlist text as a message quotes it: 'text', printable as format() shows it and cut after
+// kQuotedCharacters characters, then "..." (an unexpected token may be a megabyte of binary).
+constexpr std::size_t kQuotedCharacters = 60;
+std::string quote(std::string_view text);
 
 }  // namespace netlist

@@ -132,6 +132,45 @@ TEST(Diagnostics, FormatNamesFileLineColumnWithCaret) {
             "            ^~\n");
 }
 
+// What a diagnostic quotes or shows of the netlist is printable and short: control bytes were
+// written to the terminal as they were (an escape sequence from a binary include), and a
+// megabyte token three times (message, line, caret). A control byte in a name is refused: a NUL
+// made a node "in\0" of its own, and went into the CSV header.
+TEST(Diagnostics, QuotedAndShownTextIsPrintableAndShort) {
+  using namespace std::string_literals;
+  netlist::Diagnostics diagnostics;
+  const netlist::Diagnostic* error = first_error("t\nR1 a b 1k \x01\x1b[31m\n"s, diagnostics);
+  ASSERT_NE(error, nullptr);
+  EXPECT_EQ(netlist::format(*error),
+            "t.cir:2:11: error: unexpected '\\x01\\x1b[31m'\n"
+            "  R1 a b 1k \\x01\\x1b[31m\n"
+            "            ^~~~~~~~~~~~\n");
+
+  netlist::Diagnostics long_token;
+  error = first_error("t\nR1 a 0 1k " + std::string(1 << 20, 'x') + "\n", long_token);
+  ASSERT_NE(error, nullptr);
+  const std::string x60(netlist::kQuotedCharacters, 'x');
+  EXPECT_EQ(error->message, "unexpected '" + x60 + "...'");
+  const std::string shown = "R1 a 0 1k " + std::string(netlist::kShownCharacters - 10, 'x') + "...";
+  EXPECT_EQ(netlist::format(*error), "t.cir:2:11: error: unexpected '" + x60 + "...'\n  " + shown + "\n  " +
+                                         std::string(10, ' ') + "^" + std::string(netlist::kShownCharacters - 11, '~') + "\n");
+  // An error far into a long line: the line from kShownBefore characters before it.
+  netlist::Diagnostics far;
+  error = first_error("t\nR1 " + std::string(1000, 'n') + " 0 {1+}\n", far);
+  ASSERT_NE(error, nullptr);
+  EXPECT_EQ(netlist::format(*error), "t.cir:2:1010: error: expected an expression\n  ..." +
+                                         std::string(netlist::kShownBefore - 6, 'n') + " 0 {1+}\n     " +
+                                         std::string(netlist::kShownBefore, ' ') + "^\n");
+
+  netlist::Diagnostics nul;
+  error = first_error("t\nV1 in 0 1\nR1 in\0 0 1k\n"s, nul);
+  ASSERT_NE(error, nullptr);
+  EXPECT_EQ(netlist::format(*error),
+            "t.cir:3:6: error: the name 'in\\x00' contains a control character\n"
+            "  R1 in\\x00 0 1k\n"
+            "       ^~~~\n");
+}
+
 TEST(Diagnostics, CaretUnderContinuationLine) {
   netlist::Diagnostics diagnostics;
   const netlist::Diagnostic* error = first_error("t\nR1 a\n+  b nan\n", diagnostics);

@@ -241,9 +241,8 @@ void Model::check_inductance_matrices() {
         group[root(rows[s])] = root(column);
   std::map<int, std::vector<int>> windings;
   for (int i = 0; i < size(); ++i)
-    if (is_branch(i) && root(i) != i) windings[root(i)];
-  for (int i = 0; i < size(); ++i)
-    if (windings.contains(root(i))) windings[root(i)].push_back(i);
+    if (is_branch(i)) windings[root(i)].push_back(i);
+  std::erase_if(windings, [](const auto& group_of) { return group_of.second.size() < 2; });
   for (const auto& [first, members] : windings) {
     const auto n = static_cast<Eigen::Index>(members.size());
     Eigen::MatrixXd inductance(n, n);
@@ -256,7 +255,7 @@ void Model::check_inductance_matrices() {
     const double lowest = eigen.eigenvalues().minCoeff(), highest = eigen.eigenvalues().maxCoeff();
     if (lowest >= -1e-9 * highest) continue;
     std::string inductors, couplings, first_coupling;
-    std::unordered_set<std::string> names;
+    std::unordered_set<std::string> names;  // of the inductors
     for (int member : members) {
       names.insert(unknowns_.owner(member));
       inductors += (inductors.empty() ? "" : ", ") + unknowns_.owner(member);

@@ -212,7 +212,10 @@ class Progress {
 // Why a source's detail is finer than the integrator can resolve where it is (a few ulps of t,
 // 1e-24 of the run near t = 0), if it is: a stop time far beyond the sources' time scale (a
 // 10 us PULSE with TSTOP 1e300 s). Each source's first corners from 0, and the steps its
-// periods ask for (a sine's) at the stop time, are checked; empty when they are resolved.
+// periods ask for (a sine's) at the stop time, are checked; empty when they are resolved. Corners
+// that go on past the first kCornersChecked repeat (a PULSE, a PWL with r=): their closest pair
+// is checked against the resolution at the stop time too (a 2e-20 s PULSE period with TSTOP 1 ms
+// ran on for ever, writing gigabytes of rows).
 std::string unresolved_source_detail(const mna::Model& model, const padae::Options& options, double tstop) {
   constexpr int kCornersChecked = 1000;
   const double resolution_at_end = padae::time_resolution(tstop, options);
@@ -222,16 +225,22 @@ std::string unresolved_source_detail(const mna::Model& model, const padae::Optio
       return fmt::format("the stop time {:g} s is too long for {}'s detail: the steps that resolve it ({:.3g} s) are "
                          "below the time resolution the run has at its end ({:.3g} s)",
                          tstop, device->name(), step, resolution_at_end);
-    double previous = 0;
-    for (int k = 0; k < kCornersChecked; ++k) {
+    double previous = 0, closest = mna::infinity;
+    int corners = 0;
+    for (; corners < kCornersChecked; ++corners) {
       const double corner = device->next_time_event(previous);
       if (!(corner <= tstop)) break;
       if (const double resolution = padae::time_resolution(corner, options); corner - previous < resolution)
         return fmt::format("the stop time {:g} s is too long for {}'s detail: its corners at {:g} s and {:g} s are closer "
                            "than the time resolution the run has there ({:.3g} s)",
                            tstop, device->name(), previous, corner, resolution);
+      if (corners > 0) closest = std::min(closest, corner - previous);
       previous = corner;
     }
+    if (corners == kCornersChecked && device->next_time_event(previous) <= tstop && closest < resolution_at_end)
+      return fmt::format("the stop time {:g} s is too long for {}'s detail: its corners repeat {:.3g} s apart, closer "
+                         "than the time resolution the run has at its end ({:.3g} s)",
+                         tstop, device->name(), closest, resolution_at_end);
   }
   return "";
 }

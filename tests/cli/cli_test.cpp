@@ -913,6 +913,16 @@ TEST_F(Cli, StopTimeBeyondTheSourcesDetailIsBadInput) {
                           path("o.csv") + " --tstop 1e300");
   EXPECT_EQ(sine.exit_code, 2) << sine.err;
   EXPECT_NE(sine.err.find("too long for v1's detail: the steps that resolve it (5e-05 s)"), std::string::npos) << sine.err;
+  // A period of 2e-20 s (TR and TF of 0 are TSTEP, longer than it: its starts are the corners):
+  // resolved near t = 0, not near TSTOP = 1 ms (16 ulps of 1e-3 are 3.6e-18 s). The run once went
+  // on for ever, writing rows.
+  const Result tiny = run(write("tiny.cir", "* tiny period\nV1 g 0 PULSE(0 1 0 0 0 1e-20 2e-20)\nR1 g 0 1k\n.tran 1u 1m\n.end\n") +
+                          " -o " + path("o.csv"));
+  EXPECT_EQ(tiny.exit_code, 2) << tiny.err;
+  EXPECT_NE(tiny.err.find("the stop time 0.001 s is too long for v1's detail: its corners repeat 2e-20 s apart, closer "
+                          "than the time resolution the run has at its end (3.55e-18 s)"),
+            std::string::npos)
+      << tiny.err;
   // A stop time the detail survives is not refused.
   const Result resolved = run(path("pulse.cir") + " -o " + path("o.csv") + " --tstop 20u");
   EXPECT_EQ(resolved.exit_code, 0) << resolved.err;

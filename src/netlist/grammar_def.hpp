@@ -40,14 +40,13 @@ inline std::string lower(std::string_view text) {
   return result;
 }
 
-// x3::double_ accepts "nan" and "inf": a netlist value never may.
-struct finite_real_policies : x3::ureal_policies<double> {
-  template <typename It, typename Attribute>
-  static bool parse_nan(It&, It const&, Attribute&) { return false; }
-  template <typename It, typename Attribute>
-  static bool parse_inf(It&, It const&, Attribute&) { return false; }
-};
-inline x3::real_parser<double, finite_real_policies> const unsigned_real{};
+// The syntax of an unsigned decimal (digits with an optional fraction, an optional exponent),
+// not its value: number_value converts it, so that one beyond double's range (1e400) is said to
+// be out of range, as one below it is (x3::double_ failed on it: "expected a value"). An "e"
+// without digits is left to the suffix (units), as in SPICE.
+inline auto const unsigned_decimal =
+    x3::lexeme[((+x3::digit >> -('.' >> *x3::digit)) | ('.' >> +x3::digit)) >>
+               -(x3::no_case['e'] >> -x3::char_("+-") >> +x3::digit)];
 
 // The power of ten of an engineering suffix; the letters after it are units and ignored
 // ("10uF", "1kOhm"). Letters that are no suffix are units only ("5V"), as in SPICE. nullopt
@@ -71,16 +70,15 @@ inline std::optional<int> suffix_exponent(std::string_view letters) {
 }
 
 // The value of the whole text [first, last) of a number token (optional sign, mantissa,
-// suffix, units); nullopt when it is not one or not finite. X3 checks the syntax (and rejects
-// nan and inf); the value is converted by std::from_chars with the suffix folded into the
+// suffix, units); nullopt when it is not one or not finite. unsigned_decimal checks the syntax
+// (nan and inf are none); the value is converted by std::from_chars with the suffix folded into the
 // exponent, so that it is the double nearest to the decimal value (0.1u is 1e-7 exactly as
 // written, and printing then parsing a double gives it back).
 inline std::optional<double> number_value(Iterator first, Iterator last) {
   bool negative = false;
   if (first != last && (*first == '-' || *first == '+')) negative = *first++ == '-';
   Iterator mantissa_end = first;
-  double ignored = 0;
-  if (!x3::parse(mantissa_end, last, unsigned_real, ignored)) return std::nullopt;
+  if (!x3::parse(mantissa_end, last, unsigned_decimal)) return std::nullopt;
   if (!std::all_of(mantissa_end, last, [](char c) { return std::isalpha(static_cast<unsigned char>(c)); }))
     return std::nullopt;
   std::string mantissa(first, mantissa_end);
@@ -414,8 +412,8 @@ auto const path_def = x3::raw[lexeme[('"' >> *~x3::char_('"') >> '"') |
                                      ('\'' >> *~x3::char_('\'') >> '\'') |
                                      +~x3::char_(" \t")]][make_path];
 auto const number_tail = *x3::alpha >> !(identifier_char | '.');
-auto const number_def = x3::raw[lexeme[-x3::char_("+-") >> unsigned_real >> number_tail]][make_number];
-auto const unsigned_number_def = x3::raw[lexeme[unsigned_real >> number_tail]][make_number];
+auto const number_def = x3::raw[lexeme[-x3::char_("+-") >> unsigned_decimal >> number_tail]][make_number];
+auto const unsigned_number_def = x3::raw[lexeme[unsigned_decimal >> number_tail]][make_number];
 auto const end_of_card_def = x3::eoi;
 
 // Expressions.

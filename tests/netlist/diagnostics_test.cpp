@@ -23,6 +23,10 @@ const Malformed malformed[] = {
     {"t\n+ R1 a b 1\n", 2, 1, "continuation line '+' without a card to continue"},
     {"t\nR3 a b nan\n", 2, 8, "expected a value"},
     {"t\nR1 a b inf\n", 2, 8, "expected a value"},
+    // beyond double's range either way: the same error (1e400 was "expected a value")
+    {"t\nR1 a b 1e400\n", 2, 8, "number out of range"},
+    {"t\nR1 a b 1e-400\n", 2, 8, "number out of range"},
+    {"t\nR1 a b 2e306k\n", 2, 8, "number out of range"},  // 2e309 with the suffix
     {"t\nR4 a b 1k3\n", 2, 8, "expected a value"},
     {"t\nS1 a b c d\n", 2, 11, "expected a model name"},
     {"t\nW1 a b\n", 2, 7, "expected a voltage source name"},

@@ -569,7 +569,10 @@ class Session {
     if (progress_) progress_->clear();
     status = close_outputs(status);
     const bool stopped = status == simulation_failure && !StopSignals::received();
-    if (!options_.plot.empty() && stopped && !wrote_rows_) {
+    if (!options_.plot.empty() && StopSignals::received()) {
+      // A signal asks padsim to end now; gnuplot could take long.
+      fmt::print(stderr, "padsim: note: the plot '{}' is not written: the run was interrupted\n", options_.plot);
+    } else if (!options_.plot.empty() && stopped && !wrote_rows_) {
       print_error(fmt::format("plot: '{}' not written: no rows were computed", options_.plot));
     } else if (!options_.plot.empty() && (status == success || stopped)) {
       const std::string note = stopped ? fmt::format("the run stopped at t = {:.9g} s", last_row_) : "";

@@ -1008,16 +1008,18 @@ TEST_F(Cli, InitialConditionOnANodeASourceFixesIsBadInputAtTheIc) {
 
 TEST_F(Cli, SigtermWritesTheRowsAndEndsBySignal) {
   // A run of hours; SIGTERM once rows are on disk: padsim writes what it has, says when it
-  // stopped, and dies of SIGTERM (a shell sees 128 + 15).
+  // stopped, and dies of SIGTERM (a shell sees 128 + 15). The plot asked for is not made (gnuplot
+  // could take long), and it says so.
   const std::string netlist = write("long.cir", "* long\nC1 x 0 1 IC=1\nR1 x 0 1\n.tran 1u 1000 0 1u uic\n.end\n");
-  const std::string csv = path("long.csv"), err = path("err.txt");
+  const std::string csv = path("long.csv"), err = path("err.txt"), png = path("long.png");
   const pid_t child = ::fork();
   ASSERT_GE(child, 0);
   if (child == 0) {
     ::alarm(30);  // a safety net: the run must not outlive the test (SIGALRM ends it)
     const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(fd, STDERR_FILENO);
-    ::execl(PADSIM_EXECUTABLE, PADSIM_EXECUTABLE, netlist.c_str(), "-o", csv.c_str(), "-q", static_cast<char*>(nullptr));
+    ::execl(PADSIM_EXECUTABLE, PADSIM_EXECUTABLE, netlist.c_str(), "-o", csv.c_str(), "--plot", png.c_str(), "-q",
+            static_cast<char*>(nullptr));
     ::_exit(127);
   }
   for (int k = 0; k < 400; ++k) {
@@ -1034,6 +1036,8 @@ TEST_F(Cli, SigtermWritesTheRowsAndEndsBySignal) {
   const std::size_t at = message.find("interrupted by SIGTERM at t = ");
   ASSERT_NE(at, std::string::npos) << message;
   const double t_stop = std::strtod(message.c_str() + at + 30, nullptr);
+  EXPECT_NE(message.find("the plot '" + png + "' is not written: the run was interrupted"), std::string::npos) << message;
+  EXPECT_FALSE(fs::exists(png));
   const Csv rows = parse_csv(read(csv));
   ASSERT_GT(rows.rows.size(), 2u);
   EXPECT_NEAR(rows.rows.back()[0], t_stop, 1e-6 * std::max(1.0, t_stop));

@@ -467,7 +467,8 @@ class Session {
   }
 
   // CSV (stdout by default), raw file, event log; the plot reads a CSV file, so with the CSV on
-  // stdout a temporary one is written too. Cannot open: exit 2.
+  // stdout or on what cannot be read back (/dev/null, a pipe) a temporary one is written too.
+  // Cannot open: exit 2.
   int open_outputs() {
     if (const std::string refused = refused_output(); !refused.empty()) {
       print_error(refused);
@@ -476,7 +477,11 @@ class Session {
     try {
       const std::string output = options_.output.empty() ? "-" : options_.output;
       plot_csv_ = output;
-      if (!options_.plot.empty() && output == "-") {
+      std::error_code ignored;
+      const auto kind = std::filesystem::status(output, ignored).type();
+      const bool readable_back = output != "-" && (kind == std::filesystem::file_type::regular ||
+                                                   kind == std::filesystem::file_type::not_found);
+      if (!options_.plot.empty() && !readable_back) {
         temporary_csv_ = std::filesystem::temp_directory_path() / fmt::format("padsim-{}.csv", getpid());
         plot_csv_ = temporary_csv_.string();
         waveforms_.add(output::make_csv_writer(plot_csv_));

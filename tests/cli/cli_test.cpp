@@ -1102,6 +1102,12 @@ TEST_F(Cli, PlotWritesPng) {
   const Result r = run(write("rc.cir", rc_netlist) + " -o " + path("rc.csv") + " --plot " + png);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(read(png).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  // With the CSV thrown away the plot reads a temporary one (it read /dev/null and failed after
+  // the whole run).
+  const std::string discarded = path("discarded.png");
+  const Result d = run(path("rc.cir") + " -o /dev/null --plot " + discarded);
+  ASSERT_EQ(d.exit_code, 0) << d.err;
+  EXPECT_EQ(read(discarded).substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
 }
 
 // The plot's path is written through, as -o's is: a symlink stays a symlink (the PNG lands in

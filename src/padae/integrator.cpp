@@ -89,6 +89,8 @@ constexpr int kStartupOrder = 3;
 // Source corners one step may pass (guards sampled at each): bounds a step's work.
 constexpr int kMostCornersPassed = 1000;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
+// An unknown this large is on its way out of double's range (max 1.8e308).
+constexpr double kOverflowing = 1e300;
 // Zeno behaviour: this many consecutive event intervals, each shrinking by this ratio or more,
 // are taken as events accumulating toward a finite time.
 constexpr int kAccumulationEvents = 12;
@@ -1002,6 +1004,13 @@ StepOutcome Integrator::Impl::step(double t_stop) {
                           : correction == NewtonOutcome::outside_domain
                               ? "the model cannot be evaluated (outside its domain) however small the step"
                               : "Newton's method does not converge however small the step";
+        // A solution near the largest double (a linear E in positive feedback, 1.8e308 V) is
+        // no domain's fault: it diverges, and its largest unknown is the one to name.
+        int largest = 0;
+        if (n > 0 && x.cwiseAbs().maxCoeff(&largest) > kOverflowing)
+          return fail(t, "the solution grows without bound (" + format_number(x[largest], 3) +
+                             " at t = " + format_number(t, 17) + ", near the largest number a double holds)",
+                      largest, "an unstable circuit (positive feedback with a loop gain above 1?)");
         return fail(t, why + " at t = " + format_number(t, 17), blamed);
       }
       // The trapezoidal rule's corrector leans on q' at the step's start, and where that is a

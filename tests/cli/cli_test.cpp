@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -876,6 +877,25 @@ TEST_F(Cli, ConstantOutsideItsDomainNamesTheElement) {
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("the model cannot be evaluated (outside its domain)"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("(element b1, unknown i(b1))"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, UnboundedGrowthIsNamedAsSuchNotAsADomain) {
+  // E1 = 10 v(a) feeds a back through R2: C1 v(a)' = (v(in) - v(a) + 9 v(a)) / 1k, so
+  // v(out) = 10 (1 mV / 8) (exp(8 t / 1 ms) - 1) reaches the largest double at
+  // ln(DBL_MAX 8 / 10 mV) / 8000 = 89.558 ms.
+  const std::string csv = path("o.csv");
+  const Result r = run(write("feedback.cir", "* positive feedback\nV1 in 0 PULSE(0 1m 0 1u)\nR1 in a 1k\nR2 a out 1k\n"
+                                             "E1 out 0 a 0 10\nC1 a 0 1u\n.tran 1u 100m\n.end\n") +
+                       " -o " + csv);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("the solution grows without bound"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(node out)"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("outside its domain"), std::string::npos) << r.err;
+  const Csv rows = parse_csv(read(csv));
+  ASSERT_GT(rows.rows.size(), 10u);
+  EXPECT_GT(std::abs(rows.rows.back()[3]), 1e300);  // v(out), written up to there
+  const double t_overflow = (std::log(std::numeric_limits<double>::max()) + std::log(8 / 1e-2)) / 8000;
+  EXPECT_NEAR(rows.rows.back()[0], t_overflow, 1e-4 * t_overflow);
 }
 
 TEST_F(Cli, UicSaysWhichInitialConditionsTheCircuitOverrides) {

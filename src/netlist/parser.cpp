@@ -1,5 +1,7 @@
 // The one translation unit that instantiates the X3 grammar: splits files into cards, parses
 // each card with its rule, nests subcircuits and resolves includes.
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
@@ -36,13 +38,24 @@ void CardContext::expected(Iterator where, const std::string& what) const {
 
 namespace {
 
-// The file's text; null if it is not a readable regular file (devices and directories are
-// refused so that an include cannot block or read forever).
-std::shared_ptr<const SourceFile> read_source(const std::filesystem::path& path) {
+// The file's text; null, with why in `why`, if it is not a readable regular file (devices and
+// directories are refused so that an include cannot block or read forever).
+std::shared_ptr<const SourceFile> read_source(const std::filesystem::path& path, std::string& why) {
   std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error)) return nullptr;
+  const auto kind = std::filesystem::status(path, error).type();
+  if (kind == std::filesystem::file_type::not_found) {
+    why = "no such file";
+    return nullptr;
+  }
+  if (kind != std::filesystem::file_type::regular) {
+    why = error ? error.message() : "not a regular file";
+    return nullptr;
+  }
   std::ifstream stream(path, std::ios::binary);
-  if (!stream) return nullptr;
+  if (!stream) {
+    why = std::strerror(errno);
+    return nullptr;
+  }
   std::ostringstream text;
   text << stream.rdbuf();
   return std::make_shared<const SourceFile>(path.string(), text.str());
@@ -438,9 +451,10 @@ class Parser {
       parsed.card.reset();
       return parsed;
     }
-    auto file = read_source(path);
+    std::string why;
+    auto file = read_source(path, why);
     if (!file) {
-      diagnostics_.error(include.path.where, "cannot read '" + path.string() + "'");
+      diagnostics_.error(include.path.where, "cannot read '" + path.string() + "': " + why);
       parsed.card.reset();
       return parsed;
     }
@@ -471,9 +485,10 @@ ast::Netlist parse_text(std::string text, std::string path, Diagnostics& diagnos
 }
 
 ast::Netlist parse_file(const std::filesystem::path& path, Diagnostics& diagnostics) {
-  auto file = read_source(path);
+  std::string why;
+  auto file = read_source(path, why);
   if (!file) {
-    diagnostics.error({}, "cannot read '" + path.string() + "'");
+    diagnostics.error({}, "cannot read '" + path.string() + "': " + why);
     return {};
   }
   return Parser(diagnostics).parse_top(file);

@@ -222,13 +222,22 @@ std::string singular_linear_equations(Model& model, StartKind start, const padae
   if (lu.rank() == n) return "";
   const Eigen::VectorXd null = lu.kernel().col(0);
   const double top = null.cwiseAbs().maxCoeff();
-  std::vector<std::string> names;
+  std::vector<std::string> names, elements;  // elements: those at the undetermined nodes
+  std::vector<char> undetermined(static_cast<std::size_t>(n), 0);
   for (int i = 0; i < n; ++i)
-    if (std::abs(null[i]) > 1e-6 * top) names.push_back(model.unknowns().label(i));
+    if (std::abs(null[i]) > 1e-6 * top) {
+      names.push_back(model.unknowns().label(i));
+      undetermined[i] = model.unknowns().category(i) == UnknownCategory::node_voltage;
+    }
+  auto at_undetermined = [&](int node) { return node >= 0 && undetermined[node]; };
+  for (const Edge& e : model.edges())
+    if ((at_undetermined(e.a) || at_undetermined(e.b)) && std::find(elements.begin(), elements.end(), e.element) == elements.end())
+      elements.push_back(e.element);
   return std::string("the circuit equations are singular") + (dc ? " at the operating point" : " at the start") +
          " (linear, rank " + std::to_string(lu.rank()) + " of " + std::to_string(n) + "): they do not determine " +
-         join_names(names) +
-         " (a controlled source fixing its own control, sources that define each other, or values that cancel)";
+         join_names(names) + (elements.empty() ? "" : ", where " + join_names(elements) + (elements.size() == 1 ? " connects" : " connect")) +
+         " (a controlled source fixing its own control, sources that define each other, values that cancel, or a "
+         "conductance lost to rounding beside the others, as ROFF = 1e20 beside 1 kOhm)";
 }
 
 }  // namespace mna

@@ -205,6 +205,19 @@ TEST(Structure, SingularLinearEquationsNameTheUndeterminedUnknowns) {
             std::string::npos);
 }
 
+TEST(Structure, SingularLinearEquationsNameTheElementsAtTheUndeterminedNodes) {
+  // b and d hang from a through an open switch of ROFF 1e20 only, which rounding loses beside
+  // R1's 1 mS: v(b) and v(d) are undetermined, and s1 and r1 are what connects them.
+  CircuitSpec c;
+  c.add("v1", {"a", "0"}, 1.0);
+  c.add("vc", {"c", "0"}, 0.0);
+  c.add("s1", {"a", "b", "c", "0"}).model = {{"vt", 0.5}, {"ron", 1}, {"roff", 1e20}};
+  c.add("r1", {"b", "d"}, 1e3);
+  Model m(c, {.tstep = 1e-6, .tstop = 1e-3});
+  const std::string error = singular_linear_equations(m, StartKind::operating_point, no_predicates(m), 0, 1e-3);
+  EXPECT_NE(error.find("they do not determine v(b), v(d), where s1, r1 connect"), std::string::npos) << error;
+}
+
 TEST(Structure, RegularOrNonlinearEquationsAreNotCalledSingular) {
   CircuitSpec regular;  // gain 2: v(a) = 2 v(a) has the one solution 0
   regular.add("e1", {"a", "0", "a", "0"}, 2.0);

@@ -555,6 +555,11 @@ class Session {
           case padae::StepKind::stop:
             if (!emit_inside(t_before, outcome.t)) return interrupted(last_row_);
             emit(outcome.t, integrator_->state());
+            // A step that ended on a passable corner where a source jumps wrote the left limit;
+            // the next step writes the right one (emit_inside). A time event's state is the
+            // right limit already.
+            if (outcome.kind == padae::StepKind::accepted && model_->source_jumps_at(outcome.t))
+              right_limit_due_ = outcome.t;
             break;
         }
         progress_->update(outcome.t);
@@ -686,6 +691,14 @@ class Session {
     auto grid_point = [&](long k) {
       return options_.grid ? tstart_ + static_cast<double>(k) * settings_.tstep : mna::infinity;
     };
+    // A source's jump at a corner the steps pass (it bends nothing with a state): the right
+    // limit too, as an event's two rows, from the time resolution after it.
+    auto emit_right_limit = [&](double corner) {
+      const double right = std::min(corner + padae::time_resolution(corner, integrator_options_), t_after);
+      emit(corner, integrator_->dense_output(right, waveforms_.unknowns_read()));
+    };
+    if (right_limit_due_ == t_before) emit_right_limit(t_before);
+    right_limit_due_ = mna::infinity;
     while (grid_point(next_grid_) <= t_before) ++next_grid_;
     for (double corner = model_->next_time_event(t_before);;) {
       const double t_row = std::min(corner, grid_point(next_grid_));
@@ -693,12 +706,7 @@ class Session {
       if (StopSignals::received()) return false;
       emit(t_row, integrator_->dense_output(t_row, waveforms_.unknowns_read()));
       if (t_row == corner) {
-        // A source's jump at a corner the step passed (it bends nothing with a state): the
-        // right limit too, as an event's two rows, from the time resolution after it.
-        if (model_->source_jumps_at(corner)) {
-          const double right = std::min(corner + padae::time_resolution(corner, integrator_options_), t_after);
-          emit(t_row, integrator_->dense_output(right, waveforms_.unknowns_read()));
-        }
+        if (model_->source_jumps_at(corner)) emit_right_limit(corner);
         corner = model_->next_time_event(corner);
       }
       if (t_row == grid_point(next_grid_)) ++next_grid_;
@@ -722,6 +730,7 @@ class Session {
   std::unique_ptr<padae::Integrator> integrator_;
   std::unique_ptr<Progress> progress_;
   long next_grid_ = 0;
+  double right_limit_due_ = mna::infinity;  // the last step's end, where it wrote a jump's left limit
   double last_row_ = 0;  // the time of the last row written
   bool wrote_rows_ = false;
 };

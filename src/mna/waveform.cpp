@@ -198,19 +198,23 @@ double SourceFunction::pwl_next_corner(double t) const {
   return infinity;
 }
 
-// PWL and PULSE are linear between corners: the right limit at t is the line through the next
-// piece's midpoint and end (the function is constant after its last corner). The others are
-// continuous.
+// Only at a corner (the first one after the double before t is t itself). PWL and PULSE are
+// linear between corners: the right limit at t is the line through the next piece's midpoint
+// and end (the function is constant after its last corner). The others are continuous.
 bool SourceFunction::jumps_at(double t) const {
   // An EXP whose fall began before its rise (TD2 < TD1) jumps at TD1 to where both terms are.
   if (shape_ == Waveform::Shape::exponential) return t == p_[2] && p_[4] < p_[2] && p_[0] != p_[1];
   if (shape_ != Waveform::Shape::piecewise_linear && shape_ != Waveform::Shape::pulse) return false;
+  if (next_corner(std::nextafter(t, -infinity)) != t) return false;
   const double next = next_corner(t);
   const double end = std::isinf(next) ? t + 1 + std::abs(t) : next;
   const double middle = value(t + (end - t) / 2), at_end = value(end);
   const double right = std::isinf(next) ? at_end : 2 * middle - at_end;
-  // Beyond the rounding of the extrapolation.
-  return std::abs(right - value(t)) > 64 * std::numeric_limits<double>::epsilon() * (std::abs(middle) + std::abs(at_end));
+  // Beyond the rounding of the extrapolation: of the values, and of the times (the slope times
+  // a few ulps of t).
+  constexpr double eps = std::numeric_limits<double>::epsilon();
+  const double slope = std::isinf(next) ? 0 : std::abs(at_end - middle) / ((end - t) / 2);
+  return std::abs(right - value(t)) > 64 * eps * (std::abs(middle) + std::abs(at_end) + slope * std::abs(t));
 }
 
 double SourceFunction::resolution_step() const {

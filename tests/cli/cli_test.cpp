@@ -343,7 +343,7 @@ TEST_F(Cli, GateDriveCornersAreRowsButEndNoStep) {
   EXPECT_EQ(corners, 4);
 }
 
-TEST_F(Cli, SourceJumpAtACornerNoStepEndsOnIsWrittenAsTwoRows) {
+TEST_F(Cli, SourceJumpAtAPassableCornerIsWrittenAsTwoRows) {
   // Without a state no corner ends a step. v(a) follows its source: the PWL steps from 0 to 1 at
   // 10 us (two points at one time) and ramps back to 0 from 20 us to 30 us; the PULSE (PER 3 us
   // shorter than TR + PW + TF) falls from 2 to 0 at each period's start, 4 us and 7 us, and
@@ -365,6 +365,27 @@ TEST_F(Cli, SourceJumpAtACornerNoStepEndsOnIsWrittenAsTwoRows) {
     EXPECT_NEAR(rows[1][2], 0.0, 1e-9);  // the rise has begun, by 2 V x (16 ulp of t) / 1 ns
   }
   for (double kink : {1e-6, 20e-6, 30e-6}) EXPECT_EQ(at[kink].size(), 1u) << "t = " << kink;
+
+  // A sawtooth (TR = PER = 1 us) beside a circuit with a state, whose steps end on some of its
+  // corners: each of the 999 resets before TSTOP is two rows, 1 V then 0 V, whether a step passed
+  // it or ended on it (there the right limit was missing), and nowhere else two rows.
+  const Result saw = run(write("saw.cir", "* sawtooth\nV0 vdd 0 5\nR0 vdd 0 1k\nVc ctl 0 PULSE(0 1 0 1u 1u 1m 2m)\n"
+                                          "Rc ctl 0 1k\nL0 l0a 0 1m\nR9 l0a vdd 1k\nV1 x 0 PULSE(0 1 0 1u 1u 1m 1u)\n"
+                                          ".tran 1u 1m\n.end\n") +
+                         " --probe 'v(x)' -q");
+  ASSERT_EQ(saw.exit_code, 0) << saw.err;
+  std::map<double, std::vector<double>> values;
+  for (const auto& row : parse_csv(saw.out).rows) values[row[0]].push_back(row[1]);
+  int resets = 0;
+  for (const auto& [t, v] : values) {
+    if (v.size() == 1) continue;
+    ++resets;
+    ASSERT_EQ(v.size(), 2u) << "t = " << t;
+    EXPECT_NEAR(v[0], 1.0, 1e-9) << "t = " << t;
+    EXPECT_NEAR(v[1], 0.0, 1e-9) << "t = " << t;
+    EXPECT_NEAR(t * 1e6, std::round(t * 1e6), 1e-6) << "t = " << t;
+  }
+  EXPECT_EQ(resets, 999);
 }
 
 TEST_F(Cli, CouplingsThatMakeAnIndefiniteInductanceMatrixAreRefused) {

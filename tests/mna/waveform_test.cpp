@@ -109,6 +109,7 @@ TEST(Waveform, PulseCutShortByItsPeriodJumpsAtThePeriodsStart) {
     const double phase = std::fmod(t - 1e-6, 3e-6);  // near 0: a period's start; else the rise's end
     const bool starts_period = std::min(phase, 3e-6 - phase) < 1e-12;
     EXPECT_EQ(f.jumps_at(t), starts_period) << "t = " << t;
+    EXPECT_FALSE(f.jumps_at(std::nextafter(std::nextafter(t, 1.0), 1.0))) << "t = " << t;  // no corner there
     jumps += starts_period;
   }
   EXPECT_EQ(jumps, 100);

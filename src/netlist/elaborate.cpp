@@ -17,6 +17,7 @@
 #include <numbers>
 #include <set>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 #include <fmt/format.h>
@@ -598,6 +599,10 @@ class Elaborator {
                           const char* kind_name, const Instance& instance) {
     for (const ast::Assignment& parameter : parameters) {
       if (parameter.name.text == "ic" && element.kind != ElementKind::resistor) {
+        if (element.initial_condition) {  // which one was meant? (as a second DC value)
+          diagnostics_.error(parameter.name.where, "a second IC= for " + element.name);
+          continue;
+        }
         element.initial_condition = value(parameter.value, *instance.scope);
         continue;
       }
@@ -1001,13 +1006,17 @@ class Elaborator {
   }
 
   void elaborate_card(const ast::NodeValuesCard& card, const ast::Card&, const Instance& instance) {
-    auto& target = card.directive.text == "ic" ? circuit_.initial_conditions : circuit_.nodesets;
+    const bool ic = card.directive.text == "ic";
+    auto& target = ic ? circuit_.initial_conditions : circuit_.nodesets;
     for (const ast::NodeAssignment& assignment : card.values) {
       auto v = value(assignment.value, *instance.scope);
       if (!v) continue;
-      target.push_back({instance.node(assignment.node.text),
-                        assignment.reference ? instance.node(assignment.reference->text) : "", *v,
-                        assignment.node.where});
+      NodeValue given{instance.node(assignment.node.text),
+                      assignment.reference ? instance.node(assignment.reference->text) : "", *v, assignment.node.where};
+      if (ic && given.reference.empty() && !initial_condition_nodes_.insert(given.node).second)
+        diagnostics_.warning(assignment.node.where,
+                             ".ic of node '" + given.node + "' is given again; this value replaces the earlier one");
+      target.push_back(std::move(given));
     }
   }
 
@@ -1110,6 +1119,7 @@ class Elaborator {
   std::unordered_map<std::string, std::size_t> element_index_;
   std::vector<ControlUse> control_uses_;
   std::vector<std::pair<std::string, SourceRange>> branch_current_uses_;
+  std::unordered_set<std::string> initial_condition_nodes_;  // with a .ic v(node) so far
 };
 
 }  // namespace

@@ -65,6 +65,7 @@ const Malformed malformed[] = {
     {"t\n.param 1x=2\n", 2, 8, "expected name=value"},
     {"t\n.lib models.lib\n", 2, 16, "expected a library section name"},
     {"t\n.include nofile.cir\n", 2, 10, "cannot read 'nofile.cir': no such file"},
+    {"t\nL1 a 0 1m ic=1 ic=2\n", 2, 16, "a second IC= for l1"},
     {"t\n.include /dev/null\n", 2, 10, "cannot read '/dev/null': not a regular file"},
     {"t\n.control\nrun\n", 2, 1, ".control without .endc"},
     {"t\n.subckt s a b\nR1 a b 1\n", 2, 9, "missing .ends for subcircuit 's'"},

@@ -309,6 +309,18 @@ TEST(Elaborate, OptionsAreKeptWhateverTheirName) {
   EXPECT_EQ(circuit.options.size(), 4u);
 }
 
+TEST(Elaborate, InitialConditionGivenAgainIsWarnedOfAndTheLastKept) {
+  FlatCircuit circuit = elaborate_text("t\nV1 in 0 1\nR1 in a 1k\nC1 a 0 1u\n.ic v(a)=1\n.ic v(a)=2 v(in)=1\n"
+                                       ".tran 1u 1m uic\n");
+  ASSERT_EQ(circuit.warnings.size(), 1u);
+  EXPECT_EQ(circuit.warnings[0].severity, netlist::Severity::warning);
+  EXPECT_EQ(circuit.warnings[0].message, ".ic of node 'a' is given again; this value replaces the earlier one");
+  EXPECT_EQ(circuit.warnings[0].where.begin.line, 6);
+  EXPECT_EQ(circuit.warnings[0].where.begin.column, 7);
+  ASSERT_EQ(circuit.initial_conditions.size(), 3u);
+  EXPECT_EQ(circuit.initial_conditions[1].value, 2.0);  // after the first: the one in force
+}
+
 TEST(Elaborate, IncludesAndLibrarySectionsRelativeToTheIncludingFile) {
   FlatCircuit circuit = load_data("include_main.cir");
   EXPECT_EQ(element(circuit, "x1.r1").value, 1000.0);  // rleaf from ../leaf.inc

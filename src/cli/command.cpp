@@ -411,6 +411,7 @@ class Session {
         print_error(unresolved);
         return bad_input;
       }
+      mna::check_inductance_matrices(*model_);
       mna::check_structure(*model_, start_kind());
       if (!options_.probes.empty()) probes_ = parse_probes(options_.probes, *model_);
       else if (!flat->saves.empty()) probes_ = requested_probes(flat->saves, *model_);

@@ -3,13 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cctype>
-#include <iomanip>
 #include <numeric>
 #include <span>
-#include <sstream>
 #include <unordered_set>
-
-#include <Eigen/Eigenvalues>
 
 namespace mna {
 
@@ -175,9 +171,6 @@ Model::Model(CircuitSpec circuit, const RunSettings& settings) : circuit_(std::m
     d->jump_entries(jump_entries_);
   }
 
-  if (std::any_of(circuit_.elements.begin(), circuit_.elements.end(), [](const ElementSpec& e) { return std::tolower(e.type) == 'k'; }))
-    check_inductance_matrices();
-
   // Positions of every entry in each held row, to overwrite the row during the operating point.
   for (const auto& [n, value] : held_nodes_) {
     std::vector<int> slots;
@@ -214,64 +207,6 @@ bool Model::measure_charges_from(double t, const Vector& x, const padae::Predica
   load(t, x, p, reference_load_);
   charge_reference_.recording = false;
   return true;
-}
-
-// Couplings each within |k| <= 1 can still make an inductance matrix that is not positive
-// semidefinite (k12 = k13 = 0.9, k23 = -0.9): windings that store negative energy, whose currents
-// grow without bound (three such K cards ran to 1e64 V, in ngspice too). Each group of coupled
-// inductors' matrix, -dq/di of their flux rows, is checked; perfect coupling (k = 1) is
-// semidefinite and passes.
-void Model::check_inductance_matrices() {
-  padae::Load load{Vector::Zero(size()), Vector::Zero(size()), std::vector<double>(pattern_.nonzeros()),
-                   std::vector<double>(pattern_.nonzeros()), true};
-  this->load(0, Vector::Zero(size()), padae::Predicates(predicate_count_, 0), load);
-  // Groups of branch currents joined by mutual terms (union-find).
-  std::vector<int> group(size());
-  std::iota(group.begin(), group.end(), 0);
-  auto root = [&](int i) {
-    while (group[i] != i) i = group[i] = group[group[i]];
-    return i;
-  };
-  auto is_branch = [&](int i) { return unknowns_.category(i) == UnknownCategory::branch_current; };
-  const auto& starts = pattern_.column_starts();
-  const auto& rows = pattern_.row_indices();
-  for (int column = 0; column < size(); ++column)
-    for (int s = starts[column]; s < starts[column + 1]; ++s)
-      if (rows[s] != column && load.dq_dx[s] != 0 && is_branch(rows[s]) && is_branch(column))
-        group[root(rows[s])] = root(column);
-  std::map<int, std::vector<int>> windings;
-  for (int i = 0; i < size(); ++i)
-    if (is_branch(i)) windings[root(i)].push_back(i);
-  std::erase_if(windings, [](const auto& group_of) { return group_of.second.size() < 2; });
-  for (const auto& [first, members] : windings) {
-    const auto n = static_cast<Eigen::Index>(members.size());
-    Eigen::MatrixXd inductance(n, n);
-    for (Eigen::Index r = 0; r < n; ++r)
-      for (Eigen::Index c = 0; c < n; ++c) {
-        const int s = pattern_.find(members[r], members[c]);
-        inductance(r, c) = s < 0 ? 0.0 : -load.dq_dx[s];
-      }
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(inductance, Eigen::EigenvaluesOnly);
-    const double lowest = eigen.eigenvalues().minCoeff(), highest = eigen.eigenvalues().maxCoeff();
-    if (lowest >= -1e-9 * highest) continue;
-    std::string inductors, couplings, first_coupling;
-    std::unordered_set<std::string> names;  // of the inductors
-    for (int member : members) {
-      names.insert(unknowns_.owner(member));
-      inductors += (inductors.empty() ? "" : ", ") + unknowns_.owner(member);
-    }
-    for (const auto& spec : circuit_.elements) {
-      if (std::tolower(spec.type) != 'k' || spec.controls.empty() || !names.contains(spec.controls[0])) continue;
-      couplings += (couplings.empty() ? "" : ", ") + spec.name;
-      if (first_coupling.empty()) first_coupling = spec.name;
-    }
-    std::ostringstream eigenvalue;
-    eigenvalue << std::setprecision(3) << lowest;
-    throw ModelError("the couplings " + couplings + " make the inductance matrix of " + inductors +
-                         " indefinite (an eigenvalue of " + eigenvalue.str() +
-                         " H): those windings would store negative energy, and their currents grow without bound",
-                     first_coupling);
-  }
 }
 
 void Model::hold_rows(const Vector& x, padae::Load& out) const {

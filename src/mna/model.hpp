@@ -95,7 +95,6 @@ class Model final : public padae::System {
 
  private:
   void hold_rows(const Vector& x, padae::Load& out) const;
-  void check_inductance_matrices();
 
   // The circuit and the arena are declared before devices_: the devices read their cards and
   // live in the arena.

@@ -3,9 +3,13 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <iomanip>
+#include <map>
 #include <numeric>
 #include <queue>
+#include <sstream>
 
 namespace mna {
 
@@ -162,17 +166,24 @@ std::string mode_structure_fault(const Model& model, const padae::Predicates& mo
 
 namespace {
 
+// The model's f, q and their Jacobians on its pattern at (t, x, p); false outside its domain.
+bool load_jacobians(Model& model, double t, const Vector& x, const padae::Predicates& p, padae::Load& load) {
+  const int n = model.size();
+  const auto nonzeros = static_cast<std::size_t>(model.pattern().nonzeros());
+  load.f.setZero(n);
+  load.q.setZero(n);
+  load.df_dx.assign(nonzeros, 0.0);
+  load.dq_dx.assign(nonzeros, 0.0);
+  load.jacobian_requested = true;
+  return model.load(t, x, p, load) == padae::EvalStatus::ok;
+}
+
 // The start's Newton matrix, dense: df/dx (operating point) or df/dx + c dq/dx (uic).
 bool dense_matrix(Model& model, double t, const Vector& x, const padae::Predicates& p, double c, Eigen::MatrixXd& out) {
   padae::Load load;
   const int n = model.size();
   const padae::Pattern& pattern = model.pattern();
-  load.f.setZero(n);
-  load.q.setZero(n);
-  load.df_dx.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
-  load.dq_dx.assign(static_cast<std::size_t>(pattern.nonzeros()), 0.0);
-  load.jacobian_requested = true;
-  if (model.load(t, x, p, load) != padae::EvalStatus::ok) return false;
+  if (!load_jacobians(model, t, x, p, load)) return false;
   out.setZero(n, n);
   for (int column = 0; column < n; ++column)
     for (int k = pattern.column_starts()[column]; k < pattern.column_starts()[column + 1]; ++k)
@@ -188,6 +199,53 @@ bool dense_matrix(Model& model, double t, const Vector& x, const padae::Predicat
 }
 
 }  // namespace
+
+// Three K cards each within |k| <= 1 ran to 1e64 V (in ngspice too). The matrix is the devices'
+// own, evaluated once; each group of branch currents joined by mutual terms is checked alone.
+void check_inductance_matrices(Model& model) {
+  const auto& elements = model.circuit().elements;
+  auto is_coupling = [](const ElementSpec& e) { return std::tolower(e.type) == 'k'; };
+  if (std::none_of(elements.begin(), elements.end(), is_coupling)) return;
+  const int n = model.size();
+  padae::Load load;
+  if (!load_jacobians(model, 0, Vector::Zero(n), padae::Predicates(static_cast<std::size_t>(model.predicate_count()), 0), load))
+    return;
+  const padae::Pattern& pattern = model.pattern();
+  auto is_branch = [&](int i) { return model.unknowns().category(i) == UnknownCategory::branch_current; };
+  DisjointSets groups(n);
+  for (int column = 0; column < n; ++column)
+    for (int s = pattern.column_starts()[column]; s < pattern.column_starts()[column + 1]; ++s)
+      if (const int row = pattern.row_indices()[s]; row != column && load.dq_dx[s] != 0 && is_branch(row) && is_branch(column))
+        groups.join(row, column);
+  std::map<int, std::vector<int>> windings;
+  for (int i = 0; i < n; ++i)
+    if (is_branch(i)) windings[groups.find(i)].push_back(i);
+  for (const auto& [root, members] : windings) {
+    if (members.size() < 2) continue;
+    const auto size = static_cast<Eigen::Index>(members.size());
+    Eigen::MatrixXd inductance(size, size);
+    for (Eigen::Index r = 0; r < size; ++r)
+      for (Eigen::Index c = 0; c < size; ++c) {
+        const int s = pattern.find(members[r], members[c]);
+        inductance(r, c) = s < 0 ? 0.0 : -load.dq_dx[s];
+      }
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(inductance, Eigen::EigenvaluesOnly);
+    const double lowest = eigen.eigenvalues().minCoeff(), highest = eigen.eigenvalues().maxCoeff();
+    if (lowest >= -1e-9 * highest) continue;
+    std::vector<std::string> inductors, couplings;
+    for (int member : members) inductors.push_back(model.unknowns().owner(member));
+    for (const auto& spec : elements)
+      if (is_coupling(spec) && !spec.controls.empty() &&
+          std::find(inductors.begin(), inductors.end(), spec.controls[0]) != inductors.end())
+        couplings.push_back(spec.name);
+    std::ostringstream eigenvalue;
+    eigenvalue << std::setprecision(3) << lowest;
+    throw ModelError("the couplings " + join_names(couplings) + " make the inductance matrix of " + join_names(inductors) +
+                         " indefinite (an eigenvalue of " + eigenvalue.str() +
+                         " H): those windings would store negative energy, and their currents grow without bound",
+                     couplings.empty() ? "" : couplings.front());
+  }
+}
 
 std::string singular_linear_equations(Model& model, StartKind start, const padae::Predicates& mode, double t, double time_scale) {
   const int n = model.size();

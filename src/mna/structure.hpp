@@ -24,6 +24,13 @@ enum class StartKind {
 // loop of voltage sources is only found when it happens (the integrator reports it).
 void check_structure(const Model& model, StartKind start);
 
+// Throws ModelError, at the first K card of the group, when a group of coupled inductors has an
+// inductance matrix (their flux rows' -dq/di) that is not positive semidefinite: couplings each
+// within |k| <= 1 can still make windings that store negative energy (k12 = k13 = 0.9,
+// k23 = -0.9), whose currents grow without bound. Perfect coupling (k = 1) passes. Nothing
+// is done for a circuit without K.
+void check_inductance_matrices(Model& model);
+
 // The same checks in one mode (the start's switch and diode states): closed RON = 0 switches
 // and diodes count as voltage sources, open ROFF = infinite ones as no connection, so a loop
 // they close or a node they isolate is reported before the run.

@@ -543,7 +543,7 @@ class Session {
           case padae::StepKind::failed:
             return fail(integrator_->failure());
           case padae::StepKind::event: {
-            if (!emit_inside(t_before, outcome.t)) return interrupted(last_row_);
+            if (!emit_inside(t_before, outcome)) return interrupted(last_row_);
             // Two rows at a discontinuity: the state just before and just after it.
             const padae::EventRecord& event = integrator_->last_event();
             if (waveforms_.differ(event.x_before, integrator_->state())) emit(outcome.t, event.x_before);
@@ -554,13 +554,8 @@ class Session {
           case padae::StepKind::accepted:
           case padae::StepKind::time_event:
           case padae::StepKind::stop:
-            if (!emit_inside(t_before, outcome.t)) return interrupted(last_row_);
+            if (!emit_inside(t_before, outcome)) return interrupted(last_row_);
             emit(outcome.t, integrator_->state());
-            // A step that ended on a passable corner where a source jumps wrote the left limit;
-            // the next step writes the right one (emit_inside). A time event's state is the
-            // right limit already.
-            if (outcome.kind == padae::StepKind::accepted && model_->source_jumps_at(outcome.t))
-              right_limit_due_ = outcome.t;
             break;
         }
         progress_->update(outcome.t);
@@ -688,7 +683,8 @@ class Session {
   // a gate drive's, does not end a step, but its waveform keeps the corner) and, with --grid, at
   // TSTART + k TSTEP. False where a stop signal came first (a TSTEP far below the steps makes
   // millions of rows in one step).
-  bool emit_inside(double t_before, double t_after) {
+  bool emit_inside(double t_before, const padae::StepOutcome& outcome) {
+    const double t_after = outcome.t;
     auto grid_point = [&](long k) {
       return options_.grid ? tstart_ + static_cast<double>(k) * settings_.tstep : mna::infinity;
     };
@@ -703,7 +699,14 @@ class Session {
     while (grid_point(next_grid_) <= t_before) ++next_grid_;
     for (double corner = model_->next_time_event(t_before);;) {
       const double t_row = std::min(corner, grid_point(next_grid_));
-      if (t_row >= t_after) return true;
+      if (t_row >= t_after) {
+        // A step that ended on a passable corner where a source jumps: its row is the left
+        // limit, and the next step writes the right one. A time event's state is the right
+        // limit already.
+        if (corner == t_after && outcome.kind == padae::StepKind::accepted && model_->source_jumps_at(corner))
+          right_limit_due_ = corner;
+        return true;
+      }
       if (StopSignals::received()) return false;
       emit(t_row, integrator_->dense_output(t_row, waveforms_.unknowns_read()));
       if (t_row == corner) {

@@ -12,7 +12,7 @@ namespace padsim {
 struct CommandOptions {
   std::string netlist;
   std::string output = "-";   // CSV; "-" is standard output
-  std::string probes;         // "v(out),i(l1)"; empty: .save/.print, else the default columns
+  std::string probes;         // "v(out),i(l1)" (every --probe's list); empty: .save/.print, else the default columns
   std::optional<double> rtol, atol, tstop;
   std::optional<padae::Method> method;  // overrides .options method
   bool stats = false;

@@ -1,4 +1,4 @@
-// padsim NETLIST [-o OUT.csv] [--probe "v(out),i(l1)"] [--rtol R] [--atol A] [--tstop T] [--method M] [--stats]
+// padsim NETLIST [-o OUT.csv] [--probe "v(out),i(l1)"]... [--rtol R] [--atol A] [--tstop T] [--method M] [--stats]
 //                [--events FILE] [--raw OUT.raw] [--ascii] [--plot OUT.png] [--quiet]
 // The only translation unit that includes CLI11 (slow to compile).
 #include <CLI/CLI.hpp>
@@ -31,7 +31,12 @@ int main(int argc, char** argv) {
   CLI::App app{"padsim: transient simulation of switched circuits with exact events and jumps"};
   app.add_option("netlist", options.netlist, "SPICE netlist with a .tran card")->required();
   app.add_option("-o,--output", options.output, "waveform CSV (default: standard output)");
-  app.add_option("--probe", options.probes, "columns, e.g. \"v(out),v(a,b),i(l1)\" (default: .save/.print, else all node voltages and V and L currents)");
+  // Given again, --probe adds columns: CLI11 joins the lists with commas (splitting each at its
+  // commas first, which the join undoes: "v(a,b)" stays one probe).
+  app.add_option("--probe", options.probes,
+                 "columns, e.g. \"v(out),v(a,b),i(l1)\"; repeated, the lists add up in order (default: .save/.print, "
+                 "else all node voltages and V and L currents)")
+      ->join(',');
   add_number(app, "--rtol", options.rtol, "relative tolerance (overrides .options reltol; default 1e-8, see the README)");
   add_number(app, "--atol", options.atol, "absolute tolerance of every unknown (overrides .options abstol and vntol)");
   add_number(app, "--tstop", options.tstop, "stop time (overrides .tran)");

@@ -203,6 +203,27 @@ TEST_F(Cli, ProbeSelectsColumnsInLowerCase) {
   for (const auto& row : csv.rows) EXPECT_NEAR(row[3], 1 - row[1], 1e-12);
 }
 
+// --probe given more than once was refused ("--probe: At Most 1 required but received 3");
+// repeated, its lists add up in order, mixed with comma lists and two-node voltages.
+TEST_F(Cli, RepeatedProbeAddsColumns) {
+  const std::string csv_path = path("out.csv");
+  const Result r = run(write("rc.cir", rc_netlist) + " -o " + csv_path +
+                       " --probe 'v(out)' --probe 'i(v1),v(in,out)' --probe 'V(IN)'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Csv csv = parse_csv(read(csv_path));
+  EXPECT_EQ(csv.header, (std::vector<std::string>{"time", "v(out)", "i(v1)", "v(in,out)", "v(in)"}));
+  ASSERT_GT(csv.rows.size(), 10u);
+  for (const auto& row : csv.rows) {
+    // V1 = 1 V charges C1 = 1 uF through R1 = 1 kOhm from 0: v(out) = 1 - exp(-t / 1 ms), and
+    // V1 delivers the resistor's current (SPICE's sign: negative).
+    const double t = row[0], charging = std::exp(-t / 1e-3);
+    EXPECT_NEAR(row[1], 1 - charging, 1e-5) << "t = " << t;
+    EXPECT_NEAR(row[2], -charging / 1e3, 1e-8) << "t = " << t;
+    EXPECT_NEAR(row[3], charging, 1e-5) << "t = " << t;
+    EXPECT_EQ(row[4], 1.0) << "t = " << t;
+  }
+}
+
 TEST_F(Cli, SaveCardChoosesColumns) {
   const std::string netlist = std::string(rc_netlist).replace(std::string(rc_netlist).find(".end"), 4, ".save v(out)\n.end");
   const Result r = run(write("rc.cir", netlist));

@@ -359,6 +359,8 @@ class Parser {
         }
       }
     }
+    // As ngspice ("v1: has no value, DC 0 assumed"), which counts an AC magnitude as no value.
+    if (!dc && !waveform) diagnostics_.warning(source.name.where, source.name.text + " has no value, DC 0 assumed");
     return valid;
   }
 

@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include "netlist/netlist.hpp"
 
@@ -281,6 +284,38 @@ TEST(Diagnostics, HarmlessCardsWarnWithPosition) {
                           {7, "model type 'npn' is not supported by padsim; model 'q1' is ignored"},
                           {8, "unknown d model parameter 'zz' is kept but unused"},
                       }));
+}
+
+// A V or I source without a value was taken as DC 0 without a word; ngspice 39 says
+// "Note: v1: has no value, DC 0 assumed", also when the card has only an AC magnitude. Once per
+// card, however often its subcircuit is instantiated.
+TEST(Diagnostics, SourceWithoutValueWarnsThatDcZeroIsAssumed) {
+  netlist::Diagnostics diagnostics;
+  auto parsed = netlist::parse_text("t\nV1 x 0\nI1 y 0 ac 1\nV2 z 0 dc 0\nI2 w 0 sin(0 1 1k)\nV3 u 0 0\n"
+                                    ".subckt s p\n  V4 p 0\n.ends\nX1 a s\nX2 b s\n.tran 1n 1u\n",
+                                    "t.cir", diagnostics);
+  auto flat = netlist::elaborate(parsed, diagnostics);
+  ASSERT_TRUE(flat) << diagnostics.to_string();
+  std::vector<std::tuple<int, int, std::string>> warnings;
+  for (const auto& d : flat->warnings) {
+    EXPECT_EQ(d.severity, netlist::Severity::warning);
+    warnings.emplace_back(d.where.begin.line, d.where.begin.column, d.message);
+  }
+  EXPECT_EQ(warnings, (std::vector<std::tuple<int, int, std::string>>{
+                          {2, 1, "v1 has no value, DC 0 assumed"},
+                          {3, 1, "i1 has no value, DC 0 assumed"},
+                          {8, 3, "v4 has no value, DC 0 assumed"},
+                      }));
+  for (const char* name : {"v1", "i1", "x1.v4", "x2.v4"}) {
+    const netlist::FlatElement* source = flat->find_element(name);
+    ASSERT_NE(source, nullptr) << name;
+    EXPECT_EQ(source->source.dc, 0.0) << name;
+    EXPECT_FALSE(source->source.waveform) << name;
+  }
+  EXPECT_EQ(netlist::format(flat->warnings.front()),
+            "t.cir:2:1: warning: v1 has no value, DC 0 assumed\n"
+            "  V1 x 0\n"
+            "  ^~\n");
 }
 
 }  // namespace

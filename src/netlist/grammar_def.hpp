@@ -272,6 +272,31 @@ inline auto const make_call = [](auto& context) {
     _val(context) = make_expression(Call{name.text, std::move(arguments)}, std::move(range));
 };
 
+// Names that expressions read as something other than a parameter: padsim's `time` and `pi`, and
+// what ngspice's B sources also read as built-ins. ngspice accepts a parameter of any of them and
+// then reads it in some places and the built-in in others (.param pi=3 is 3 in an R value and
+// 3.14159 in a B source; .param time=5 and .param temper=50 are read nowhere), so padsim refuses it.
+struct ReservedName {
+  std::string_view name, meaning;
+};
+inline constexpr std::array<ReservedName, 5> reserved_names{{
+    {"time", "the simulation time"},
+    {"pi", "the constant 3.14159..."},
+    {"e", "the constant 2.71828... in ngspice's B sources"},
+    {"temper", "the circuit temperature in ngspice"},
+    {"hertz", "the frequency of ngspice's AC analysis"},
+}};
+
+inline auto const make_parameter = [](auto& context) {
+  ast::Word const& name = at_c<0>(_attr(context));
+  auto reserved = std::find_if(reserved_names.begin(), reserved_names.end(),
+                               [&](const ReservedName& r) { return r.name == name.text; });
+  if (reserved != reserved_names.end())
+    throw CardError{name.where, "'" + name.text + "' is reserved (" + std::string(reserved->meaning) +
+                                    ") and cannot name a parameter"};
+  _val(context) = ast::Assignment{name, at_c<1>(_attr(context))};
+};
+
 // Source specs from a keyword and its values: dc value, ac magnitude [phase].
 inline auto const make_dc_spec = [](auto& context) {
   ast::SourceSpec spec;
@@ -500,7 +525,7 @@ x3::rule<class params_keyword_id> const params_keyword = "params:";
 // Instance and model parameters take values; .param, subcircuit and instance parameters take
 // expressions (braces optional).
 auto const assignment_def = (identifier >> '=') > value;
-auto const parameter_def = (identifier >> '=') > expression;
+auto const parameter_def = ((identifier >> '=') > expression)[make_parameter];
 auto const params_keyword_def = lexeme[no_case[lit("params:")]];
 
 // ---- element cards -------------------------------------------------------------------------

@@ -66,6 +66,18 @@ const Malformed malformed[] = {
     {"t\n.model d1 D(is=inf)\n", 2, 16, "expected a value"},
     {"t\n.ic v(a)\n", 2, 9, "expected '='"},
     {"t\n.param 1x=2\n", 2, 8, "expected name=value"},
+    // Names expressions read as built-ins: ngspice 39 takes `.param time=5` (a B source's time is
+    // still the simulation time, and R1 a 0 {time} a resistor of that time) and `.param pi=3`
+    // (3 in an R value, 3.14159 in a B source); e, temper, hertz likewise.
+    {"t\n.param a=1 time=5\n", 2, 12, "'time' is reserved (the simulation time) and cannot name a parameter"},
+    {"t\n.param PI=3\n", 2, 8, "'pi' is reserved (the constant 3.14159...) and cannot name a parameter"},
+    {"t\n.param e=7\n", 2, 8,
+     "'e' is reserved (the constant 2.71828... in ngspice's B sources) and cannot name a parameter"},
+    {"t\n.param temper=50\n", 2, 8, "'temper' is reserved (the circuit temperature in ngspice) and cannot name a parameter"},
+    {"t\n.param hertz=1k\n", 2, 8, "'hertz' is reserved (the frequency of ngspice's AC analysis) and cannot name a parameter"},
+    {"t\n.subckt s p params: pi=2\n.ends\n", 2, 21, "'pi' is reserved (the constant 3.14159...) and cannot name a parameter"},
+    {"t\n.subckt s p\n.param time=1\n.ends\n", 3, 8, "'time' is reserved (the simulation time) and cannot name a parameter"},
+    {"t\n.subckt s p w=1\n.ends\nX1 a s time=2\n", 4, 8, "'time' is reserved (the simulation time) and cannot name a parameter"},
     {"t\n.lib models.lib\n", 2, 16, "expected a library section name"},
     {"t\n.include nofile.cir\n", 2, 10, "cannot read 'nofile.cir': no such file"},
     {"t\nL1 a 0 1m ic=1 ic=2\n", 2, 16, "a second IC= for l1"},

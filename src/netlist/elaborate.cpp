@@ -622,6 +622,13 @@ class Elaborator {
     auto v = value(card.value, *instance.scope);
     if (!v) return;
     element.value = *v;
+    // Valid equations (ngspice takes it without a word), but rarely meant: with a resistor, the
+    // RC mode grows as exp(t / (R |C|)) instead of decaying.
+    if (kind == ElementKind::capacitor && element.value < 0)
+      diagnostics_.warning(card.value->where,
+                           fmt::format("capacitor {} has negative capacitance {:g} F: it stores negative energy, and "
+                                       "a mode it dominates grows instead of decaying",
+                                       element.name, element.value));
     element_parameters(card.parameters, element, kind_name, instance);
     add(std::move(element));
   }

@@ -427,6 +427,37 @@ TEST_F(Cli, CouplingsThatMakeAnIndefiniteInductanceMatrixAreRefused) {
   EXPECT_EQ(perfect.exit_code, 0) << perfect.err;
 }
 
+// A negative capacitance ran without a word (ngspice 39 runs it silently too): it is warned of
+// at its value, and the waveform is still the solution, v = exp(t / (R |C|)) from IC=1 (ngspice:
+// 148.419 at 5 ms).
+TEST_F(Cli, NegativeCapacitanceIsWarnedOfAndItsGrowthFollowed) {
+  const Result r = run(write("neg.cir", "* negative C\nR1 a 0 1k\nC1 a 0 -1u IC=1\n.tran 10u 5m uic\n.end\n") +
+                       " --probe 'v(a)'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("neg.cir:3:8: warning: capacitor c1 has negative capacitance -1e-06 F"), std::string::npos)
+      << r.err;
+  const Csv csv = parse_csv(r.out);
+  ASSERT_GT(csv.rows.size(), 10u);
+  EXPECT_EQ(csv.rows.back()[0], 5e-3);
+  for (const auto& row : csv.rows) EXPECT_NEAR(row[1], std::exp(row[0] / 1e-3), 1e-6 * std::exp(row[0] / 1e-3)) << row[0];
+}
+
+// A zero capacitance is an open, grounded or floating (as ngspice's): v(a) = 1 mA x 1 kOhm from
+// the start, and nothing reaches b.
+TEST_F(Cli, ZeroCapacitanceIsAnOpen) {
+  const Result r = run(write("zero.cir", "* zero C\nI1 0 a 1m\nR1 a 0 1k\nC1 a 0 0\nC2 a b 0\nR2 b 0 1k\n"
+                                         ".tran 10u 1m\n.end\n") +
+                       " --probe 'v(a),v(b)'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  const Csv csv = parse_csv(r.out);
+  ASSERT_GT(csv.rows.size(), 1u);
+  for (const auto& row : csv.rows) {
+    EXPECT_NEAR(row[1], 1.0, 1e-12) << row[0];
+    EXPECT_NEAR(row[2], 0.0, 1e-12) << row[0];
+  }
+}
+
 TEST_F(Cli, BadInputExitsWithTwo) {
   EXPECT_EQ(run(path("missing.cir")).exit_code, 2);
   EXPECT_EQ(run("").exit_code, 2);
